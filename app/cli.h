@@ -1,0 +1,29 @@
+/* Shared helpers of the sasnav command-line tool. */
+#ifndef SASNAV_CLI_H
+#define SASNAV_CLI_H
+
+#include "sasnav/error.h"
+#include "sasnav/image.h"
+
+/* Prints "sasnav COMMAND: message" (with the library's last error when rc is
+ * a library code) and returns 1, for `return cli_fail(...)`. */
+int cli_fail(const char *command, int rc, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* Parses exactly n comma-separated finite doubles. Returns 0 on success. */
+int cli_parse_doubles(const char *text, int n, double *out);
+/* Parses a finite double / an int in [lo, hi]. Returns 0 on success. */
+int cli_parse_double(const char *text, double *out);
+int cli_parse_int(const char *text, long lo, long hi, long *out);
+/* Parses X0,X1,NX,Y0,Y1,NY into a grid. */
+int cli_parse_grid(const char *text, sasnav_grid *grid);
+
+int cmd_simulate(int argc, char **argv);
+int cmd_image(int argc, char **argv);
+int cmd_pair(int argc, char **argv);
+int cmd_cuts(int argc, char **argv);
+
+#endif

@@ -1,0 +1,118 @@
+/* sasnav -- the subspace-intersection ping-pair estimator (paper Section III,
+ * SPEC 3).
+ *
+ * For pings p and q and a hypothesised displacement sigma of q's PCA centroid
+ * in p's centroid frame:
+ *   rho_p = T_p^+ phi_p,  rho_q(sigma) = T_q(sigma)^+ phi_q     (CGLS, k its)
+ *   Q(sigma) x = T(sigma)^+ T(sigma) x                        (projector)
+ *   psi_p = (Q_p Q_q)^i rho_p,  psi_q = (Q_q Q_p)^i rho_q     (intersection)
+ *   zeta = || |psi_p| - |psi_q| || / nrm,  eta = || psi_p - psi_q || / nrm.
+ * sigma moves q's sensors (T_q(sigma) is rebuilt); images are never resampled.
+ * Each ping is modelled by its EPCA geometry (paper III-B): array tx_lag/2
+ * ahead of the centroid, Tx tx_lag/2 behind, so that the centroid is the PCA
+ * centroid of SPEC 1.
+ *
+ * Search (docs/estimator.md): a coarse global stage on a blurred zeta at
+ * reduced resolution and iterations over the whole search box, a local
+ * stage on zeta, then a local stage on eta with a check of the neighbouring
+ * sway fringes (eta oscillates along sway with period lambda/2). Optimisers
+ * from NLopt.
+ *
+ * Thread safety: one estimator object per thread. Internally the operators
+ * use opts.nthreads OpenMP threads.
+ */
+#ifndef SASNAV_ESTIMATOR_H
+#define SASNAV_ESTIMATOR_H
+
+#include "sasnav/image.h"
+#include "sasnav/op.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum {
+    SASNAV_NORM_MAX = 0, /* max(||psi_p||, ||psi_q||) (default) */
+    SASNAV_NORM_P = 1,   /* ||psi_p|| */
+    SASNAV_NORM_Q = 2,   /* ||psi_q|| */
+    SASNAV_NORM_NONE = 3
+} sasnav_norm;
+
+typedef struct {
+    int k;                 /* CGLS iterations of the final stages (default 5) */
+    int i;                 /* alternating-projection iterations (default 5) */
+    int coarse_k, coarse_i;/* iterations of the global and zeta stages (default 2, 1) */
+    double tikhonov;       /* CGLS Tikhonov weight (default 0) */
+    sasnav_norm norm;
+    double tx_lag;         /* m, EPCA Tx-array offset (default 0.10) */
+    double range;          /* m, centre range of the estimation grid (default 10) */
+    double range_extent;   /* m, range extent of the grid (default 1.6) */
+    double cross_extent;   /* m, along-track extent of the grid (default 1.0) */
+    double pixel;          /* m, pixel size (default: min(D/4, c/(4B))) */
+    double coarse_pixel;   /* m, pixel of the global stage (default 2 * pixel) */
+    double blur;           /* m, Gaussian blur sigma of the global stage's moduli (0.075) */
+    sasnav_pose prior;     /* prior motion error (default 0) */
+    sasnav_pose box;       /* half-widths of the search box around the prior
+                              (default 0.06 m, 0.035 m, 0.06 rad) */
+    sasnav_pose grid_step; /* steps of the global grid (default 0.01 m, 0.01 m, 0.01 rad) */
+    int global_stage;      /* 1 (default): run the global stage; 0: local only */
+    double min_overlap;    /* minimum ||psi|| / ||rho|| before "no overlap" (1e-3) */
+    int max_evaluations;   /* per local stage (default 400) */
+    int nthreads;          /* OpenMP threads for the operators (0 = default) */
+    sasnav_op_opts op;     /* operator options */
+} sasnav_pair_opts;
+
+void sasnav_pair_default_opts(sasnav_pair_opts *opts);
+
+/* Result of one estimate. Motion error = displacement - nominal displacement
+ * (component-wise; surge, sway, yaw). */
+typedef struct {
+    int status;                /* SASNAV_OK, SASNAV_ERR_NO_OVERLAP, SASNAV_ERR_NOT_CONVERGED */
+    sasnav_pose error;         /* final motion-error estimate (after eta) */
+    sasnav_pose displacement;  /* final displacement estimate */
+    sasnav_pose global_stage;  /* motion error after the global stage */
+    sasnav_pose zeta_stage;    /* motion error after the zeta stage */
+    double zeta, eta;          /* error-function values at the stage minima */
+    double overlap;            /* ||psi_p|| / ||rho_p|| at the estimate */
+    int evaluations;           /* total error-function evaluations */
+    int evaluations_global, evaluations_zeta, evaluations_eta;
+    long applications;         /* total operator applications (T or T^H) */
+    double seconds;            /* wall time */
+} sasnav_pair_result;
+
+typedef struct sasnav_pair sasnav_pair;
+
+/* Creates an estimator for pings with the given system, array and window.
+ * The grid is built in p's centroid frame around (nominal.x / 2, range). */
+int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
+                       const sasnav_window *win, const sasnav_pair_opts *opts,
+                       sasnav_pair **pair);
+
+/* Sets the two pings: their data (n_rx * n_samples each, copied) and the
+ * nominal displacement of q relative to p (e.g. (spacing, 0, 0)).
+ * Errors: identical data (the same ping twice), an empty (all-zero) or
+ * non-finite channel. */
+int sasnav_pair_set_data(sasnav_pair *pair, const sasnav_cfloat *data_p,
+                         const sasnav_cfloat *data_q, sasnav_pose nominal);
+
+/* Evaluates zeta and eta at a hypothesised MOTION ERROR (displacement =
+ * nominal + error) with the final (k, i) (level 1) or the coarse ones
+ * (level 0; blurred when blurred != 0). Either output may be NULL.
+ * overlap (may be NULL) receives ||psi_p|| / ||rho_p||. */
+int sasnav_pair_eval(sasnav_pair *pair, sasnav_pose error, int level, int blurred,
+                     double *zeta, double *eta, double *overlap);
+
+/* Full two-stage estimate (with the global stage if enabled). */
+int sasnav_pair_estimate(sasnav_pair *pair, sasnav_pair_result *result);
+
+/* The estimator's grid (p's centroid frame). */
+const sasnav_grid *sasnav_pair_grid(const sasnav_pair *pair);
+/* Operator applications so far. */
+long sasnav_pair_applications(const sasnav_pair *pair);
+
+void sasnav_pair_destroy(sasnav_pair *pair);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,92 @@
+/* sasnav -- planar geometry: SE(2) poses, the array, ping poses, PCA centroids.
+ *
+ * Conventions (SPEC 1): x along-track, y range (towards the scene), theta yaw
+ * counter-clockwise from +x. At theta = 0 the array axis is +x and every
+ * element looks along +y. Metres and radians.
+ * All functions here are pure and thread-safe.
+ */
+#ifndef SASNAV_GEOMETRY_H
+#define SASNAV_GEOMETRY_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SASNAV_MAX_RX 128
+
+/* A pose in SE(2): position (x, y) and yaw theta. */
+typedef struct {
+    double x, y, theta;
+} sasnav_pose;
+
+/* Composition a * b: b expressed in a's frame, returned in the world frame. */
+sasnav_pose sasnav_pose_compose(sasnav_pose a, sasnav_pose b);
+/* Inverse: a * inverse(a) = identity. */
+sasnav_pose sasnav_pose_inverse(sasnav_pose a);
+/* Pose of q in p's frame: inverse(p) * q. */
+sasnav_pose sasnav_pose_between(sasnav_pose p, sasnav_pose q);
+/* Applies pose a to a point (px, py) given in a's frame. */
+void sasnav_pose_apply(sasnav_pose a, double px, double py, double *wx, double *wy);
+/* Wraps an angle to (-pi, pi]. */
+double sasnav_wrap_angle(double theta);
+
+/* The sensor head: N receivers along the array axis and one transmitter.
+ * rx_u[l] is the along-array coordinate of receiver l relative to the array
+ * midpoint (SPEC 1: (l - (N-1)/2) * spacing for a uniform array).
+ * Heights are above the scene plane (3-D geometries, e.g. in-air rigs);
+ * motion stays in the plane. */
+typedef struct {
+    int n_rx;
+    double rx_u[SASNAV_MAX_RX]; /* m, along the array axis */
+    double rx_length;           /* m, receiver aperture D_r (0 = omnidirectional) */
+    double tx_length;           /* m, transmitter aperture D_t (0 = omnidirectional) */
+    double rx_height;           /* m above the scene plane (default 0) */
+    double tx_height;           /* m above the scene plane (default 0) */
+} sasnav_array;
+
+/* Fills a uniform array of n receivers spaced `spacing`, all of length
+ * `length`, transmitter of length `tx_length`. Returns SASNAV_ERR_ARG for
+ * n < 1, n > SASNAV_MAX_RX, or non-finite / negative sizes. */
+int sasnav_array_uniform(sasnav_array *array, int n, double spacing, double length,
+                         double tx_length);
+
+/* Validates an array description (finite values, 1 <= n_rx <= MAX). */
+int sasnav_array_check(const sasnav_array *array);
+
+/* The true (or modelled) geometry of one ping: the transmitter pose at
+ * transmission and the array (midpoint) pose at reception. */
+typedef struct {
+    sasnav_pose tx;
+    sasnav_pose array;
+} sasnav_ping_pose;
+
+/* PCA centroid of a ping: ((x_a + x_t)/2, (y_a + y_t)/2, theta_array)
+ * (SPEC 1; the paper's (y_a + x_t)/2 is a typo). */
+sasnav_pose sasnav_ping_centroid(const sasnav_ping_pose *ping);
+
+/* Displacement of ping q relative to ping p: pose of q's centroid in p's
+ * centroid frame, (surge, sway, yaw). */
+sasnav_pose sasnav_ping_displacement(const sasnav_ping_pose *p, const sasnav_ping_pose *q);
+
+/* The ping's sensors expressed in its own centroid frame (paper sigma_r0,
+ * sigma_t0, rotated into the centroid frame). */
+sasnav_ping_pose sasnav_ping_local(const sasnav_ping_pose *ping);
+
+/* Places a local (centroid-frame) ping geometry at a centroid pose:
+ * world = centroid * local, for both tx and array. */
+sasnav_ping_pose sasnav_ping_place(sasnav_pose centroid, const sasnav_ping_pose *local);
+
+/* EPCA replacement geometry (paper eq. epcar/epcat, SPEC 3) in the centroid
+ * frame: the array midpoint ahead of the transmitter by `tx_lag` metres along
+ * the array axis (the distance the vehicle covers while the pulse travels to
+ * the range of interest and back), sharing the centroid: array at (+lag/2, 0,
+ * 0), Tx at (-lag/2, 0, dtheta_tx). */
+sasnav_ping_pose sasnav_epca_local(double tx_lag, double dtheta_tx);
+
+/* Tx-array offset caused by vehicle motion: speed * 2 R / c (metres). */
+double sasnav_motion_tx_lag(double speed, double range, double sound_speed);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

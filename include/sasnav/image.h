@@ -1,0 +1,54 @@
+/* sasnav -- image grids, backprojection of runs and CGLS inversion of pings. */
+#ifndef SASNAV_IMAGE_H
+#define SASNAV_IMAGE_H
+
+#include "sasnav/op.h"
+#include "sasnav/run.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Rectangular grid in the scene plane. Pixel (iy, ix) is at
+ * (x0 + ix dx, y0 + iy dy); images are stored row-major [iy][ix]
+ * (rows along range y, columns along track x). */
+typedef struct {
+    double x0, y0;  /* m, centre of the first pixel */
+    double dx, dy;  /* m, pixel spacing (> 0) */
+    int nx, ny;
+} sasnav_grid;
+
+/* Grid covering [x_min, x_max] x [y_min, y_max] with nx x ny pixels (n >= 2,
+ * or n = 1 with min == max). */
+int sasnav_grid_make(double x_min, double x_max, int nx, double y_min, double y_max, int ny,
+                     sasnav_grid *grid);
+int sasnav_grid_check(const sasnav_grid *grid);
+
+/* Pixel coordinates of the grid, transformed by `frame` (world = frame * local)
+ * into x[n], y[n], n = iy * nx + ix. Arrays must hold nx * ny values. */
+void sasnav_grid_points(const sasnav_grid *grid, sasnav_pose frame, double *x, double *y);
+
+/* Backprojection of a whole run (paper eq. bckprj): image = sum_p T_p^H phi_p
+ * on `grid`, with ping poses nav[p] (world frame). image has nx * ny values. */
+int sasnav_backproject(const sasnav_run *run, const sasnav_ping_pose *nav,
+                       const sasnav_grid *grid, const sasnav_op_opts *opts,
+                       sasnav_cfloat *image);
+
+/* Options of the CGLS pseudo-inverse. */
+typedef struct {
+    int iterations;   /* k, default 5 */
+    double tikhonov;  /* lambda >= 0: minimises ||T x - d||^2 + lambda ||x||^2 (default 0) */
+} sasnav_cgls_opts;
+
+void sasnav_cgls_default_opts(sasnav_cgls_opts *opts);
+
+/* x = T^+ d by k iterations of CGLS started from 0 (truncated, regularised
+ * pseudo-inverse). The operator's geometry must be set. `work` may be NULL
+ * (allocated internally) or hold 2 * n_points + 2 * n_rx * n_samples values. */
+int sasnav_cgls(sasnav_op *op, const sasnav_cfloat *data, const sasnav_cgls_opts *opts,
+                sasnav_cfloat *x, sasnav_cfloat *work);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,43 @@
+/* sasnav -- HDF5 files (layout in docs/format.md).
+ *
+ * This layer is separate from the numerical core: only the CLI and tools
+ * call it. Every writer writes to "<path>.tmp-XXXXXX" in the same directory
+ * and renames it onto `path` only on success, so a failure never leaves a
+ * half-written output file. Readers validate every dataset's type and shape
+ * and every value (finite navigation, positive sizes) and return
+ * SASNAV_ERR_IO (missing/unreadable file) or SASNAV_ERR_FORMAT (corrupt,
+ * truncated, wrong shape, missing dataset) with a message naming the problem.
+ * HDF5's own error printing is silenced.
+ */
+#ifndef SASNAV_IO_H
+#define SASNAV_IO_H
+
+#include "sasnav/image.h"
+#include "sasnav/run.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Raw-data run: /raw, /nav/*, /truth/* (if known), system attributes. */
+int sasnav_run_write(const char *path, const sasnav_run *run);
+int sasnav_run_read(const char *path, sasnav_run **run);
+
+/* Navigation only (e.g. the output of `sasnav navigate`): /nav/tx,
+ * /nav/array [ping][3] and optionally /truth/tx, /truth/array. */
+int sasnav_nav_write(const char *path, int n_pings, const sasnav_ping_pose *nav,
+                     const sasnav_ping_pose *truth);
+/* Reads /nav (allocated, n_pings returned); truth may be NULL (not read) and
+ * *truth is set to NULL when the file has none. */
+int sasnav_nav_read(const char *path, int *n_pings, sasnav_ping_pose **nav,
+                    sasnav_ping_pose **truth);
+
+/* Complex image: /image [ny][nx] compound {r, i} float32, /x [nx], /y [ny]. */
+int sasnav_image_write(const char *path, const sasnav_grid *grid, const sasnav_cfloat *image);
+/* Allocates *image (nx * ny values); free with free(). */
+int sasnav_image_read(const char *path, sasnav_grid *grid, sasnav_cfloat **image);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

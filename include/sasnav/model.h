@@ -1,0 +1,76 @@
+/* sasnav -- the acoustic system and the sampled observation window (SPEC 2). */
+#ifndef SASNAV_MODEL_H
+#define SASNAV_MODEL_H
+
+#include <complex.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Complex single-precision sample (baseband data, reflectivity). Layout is
+ * two floats (re, im), identical to fftwf_complex and to the HDF5 compound
+ * {r, i} of the file format. */
+typedef float _Complex sasnav_cfloat;
+
+/* Spreading-loss model (SPEC 2). */
+typedef enum {
+    SASNAV_ATTEN_EXPLODING = 0, /* 1 / sqrt(r_t + r_r), the paper's default */
+    SASNAV_ATTEN_SPHERICAL = 1, /* 1 / (r_t r_r) */
+    SASNAV_ATTEN_NONE = 2
+} sasnav_attenuation;
+
+/* Spectral taper of the compressed pulse. */
+typedef enum {
+    SASNAV_TAPER_NONE = 0, /* flat spectrum over [-B/2, B/2]: sinc pulse */
+    SASNAV_TAPER_HANN = 1,
+    SASNAV_TAPER_HAMMING = 2
+} sasnav_taper;
+
+/* Acoustic system: everything that does not change from ping to ping. */
+typedef struct {
+    double sound_speed;  /* c, m/s */
+    double f0;           /* carrier (centre) frequency, Hz */
+    double bandwidth;    /* B, Hz; the compressed pulse occupies [-B/2, B/2] */
+    double sample_rate;  /* complex baseband sampling rate fs, Hz (>= B) */
+    sasnav_taper taper;
+    sasnav_attenuation attenuation;
+    int beam_pattern;    /* 1: line-aperture sinc patterns of Tx and Rx; 0: omni */
+} sasnav_system;
+
+/* The time window of a ping's samples: t_m = t0 + m / fs, m = 0..n_samples-1,
+ * t measured from transmission. */
+typedef struct {
+    double t0;       /* s */
+    int n_samples;
+} sasnav_window;
+
+/* Fills `sys` with the paper-pair system: c = 1500, f0 = 300 kHz,
+ * B = 30 kHz, fs = 2B, no taper, exploding sources, beam patterns on. */
+void sasnav_system_default(sasnav_system *sys);
+
+/* Validates the system (finite, positive, fs >= B, f0 > B/2). */
+int sasnav_system_check(const sasnav_system *sys);
+
+/* Window covering two-way ranges (r_t + r_r)/2 in [range_min, range_max]
+ * (metres) with `margin_samples` extra samples at both ends. */
+int sasnav_window_for_ranges(const sasnav_system *sys, double range_min, double range_max,
+                             int margin_samples, sasnav_window *win);
+
+/* Wavelength c / f0. */
+double sasnav_wavelength(const sasnav_system *sys);
+
+/* Direct (slow, exact) evaluation of the band-limited compressed pulse used by
+ * the operators: p(t) = (1/W) sum_k w(f_k) exp(j 2 pi f_k t) over the discrete
+ * frequencies f_k = k / (period) with |f_k| <= B/2, W = sum_k w(f_k), so that
+ * p(0) = 1. `period` is the periodic extent of the operator's FFT grid (see
+ * sasnav_op_period). Used as the reference in tests and for documentation. */
+sasnav_cfloat sasnav_pulse_direct(const sasnav_system *sys, double period, double t);
+
+/* Spectral weight w(f) of the taper at baseband frequency f (0 outside band). */
+double sasnav_pulse_weight(const sasnav_system *sys, double f);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

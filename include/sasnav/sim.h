@@ -1,0 +1,96 @@
+/* sasnav -- scenarios, trajectories and the raw-data simulator. */
+#ifndef SASNAV_SIM_H
+#define SASNAV_SIM_H
+
+#include <stdint.h>
+
+#include "sasnav/image.h"
+#include "sasnav/run.h"
+#include "sasnav/scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SASNAV_MAX_TARGETS 64
+
+typedef enum {
+    SASNAV_SCENE_RIPPLES = 0, /* paper scene: speckle + ripples + disc */
+    SASNAV_SCENE_POINTS = 1,  /* point targets listed in the scenario */
+    SASNAV_SCENE_FILE = 2     /* image file (HDF5 image layout) */
+} sasnav_scene_kind;
+
+/* Trajectory model: a nominal straight track along +x at y = 0 and smooth
+ * random motion errors (surge, sway, yaw) of the vehicle, plus optionally an
+ * explicit error of ping `pair_q` relative to ping `pair_q - 1`. */
+typedef struct {
+    int n_pings;
+    double ping_spacing;     /* m, nominal (default 0.20) */
+    double speed;            /* m/s (default 2) */
+    double x_start;          /* m, centroid x of the first ping */
+    double surge_rms;        /* m, rms of the smooth surge error of the path */
+    double sway_rms;         /* m */
+    double yaw_rms;          /* rad */
+    double smooth_length;    /* m, correlation length of the errors (default 1.0) */
+    int has_pair_error;      /* apply pair_error to ping pair (pair_q-1, pair_q) */
+    int pair_q;
+    sasnav_pose pair_error;  /* surge, sway, yaw of ping pair_q relative to pair_q-1 */
+    double tx_lag;           /* m, Tx-array offset from motion (EPCA model) */
+    int true_bistatic;       /* 1: true Tx/array poses sampled on the path at
+                                transmission / reception (different yaw);
+                                0: exact EPCA geometry around each centroid */
+    uint64_t seed;
+} sasnav_trajectory_params;
+
+/* A complete simulated scenario (what a config file or a preset describes). */
+typedef struct {
+    char name[64];
+    sasnav_system sys;
+    sasnav_array array;
+    double range_min, range_max;   /* m, swath (sets the sample window) */
+    double range_of_interest;      /* m, mid-range */
+    sasnav_trajectory_params traj;
+    sasnav_scene_kind scene_kind;
+    sasnav_ripple_params ripples;
+    int n_targets;
+    double target_x[SASNAV_MAX_TARGETS], target_y[SASNAV_MAX_TARGETS];
+    double target_amp[SASNAV_MAX_TARGETS];
+    char scene_file[512];
+    double snr_db;                 /* additive noise; +inf = noise-free */
+    uint64_t noise_seed;
+    sasnav_grid image_grid;        /* default grid for imaging */
+} sasnav_scenario;
+
+/* Built-in presets: "paper-pair", "paper-trajectory", "point" (one point
+ * target in paper-pair geometry). Returns SASNAV_ERR_ARG for unknown names. */
+int sasnav_scenario_preset(const char *name, sasnav_scenario *sc);
+
+/* Validates a scenario (positive sizes, finite values, sensible ranges). */
+int sasnav_scenario_check(const sasnav_scenario *sc);
+
+/* Nominal ping poses (straight track, EPCA geometry, no error). */
+int sasnav_trajectory_nominal(const sasnav_trajectory_params *tp, sasnav_ping_pose *poses);
+
+/* True ping poses: nominal plus the smooth random errors (seeded) plus the
+ * explicit pair error. */
+int sasnav_trajectory_true(const sasnav_trajectory_params *tp, sasnav_ping_pose *poses);
+
+/* Simulates the raw data of a scenario for the given true poses into run->raw
+ * (using a scene whose scatterers are off any reconstruction grid), adding
+ * complex white Gaussian noise at sc->snr_db (per-run signal power / noise
+ * power, seeded by sc->noise_seed). */
+int sasnav_simulate_raw(const sasnav_scenario *sc, const sasnav_scene *scene,
+                        const sasnav_ping_pose *truth, sasnav_run *run,
+                        const sasnav_op_opts *opts);
+
+/* Complete simulation: scene, trajectories, raw data. Sets run->nav to the
+ * nominal poses and run->truth to the true ones. `scene` may be NULL: the
+ * scene is then built from the scenario (ripples or point targets); a
+ * SASNAV_SCENE_FILE scenario needs the caller to load the scene and pass it. */
+int sasnav_simulate(const sasnav_scenario *sc, const sasnav_scene *scene,
+                    const sasnav_op_opts *opts, sasnav_run **run);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

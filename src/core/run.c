@@ -1,0 +1,127 @@
+/* In-memory runs: allocation, access to a ping's channels, validation. */
+#include "sasnav/run.h"
+#include "sasnav/error.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+
+/* Number of samples of a run, with overflow check (0 on overflow). */
+static size_t run_sample_count(int n_pings, int n_rx, int n_samples)
+{
+    size_t n = (size_t)n_pings;
+    if ((size_t)n_rx > SIZE_MAX / n) return 0;
+    n *= (size_t)n_rx;
+    if ((size_t)n_samples > SIZE_MAX / sizeof(sasnav_cfloat) / n) return 0;
+    return n * (size_t)n_samples;
+}
+
+static int window_check(const sasnav_window *win)
+{
+    if (!win) return sasnav_set_error(SASNAV_ERR_ARG, "window is NULL");
+    if (win->n_samples < 1)
+        return sasnav_set_error(SASNAV_ERR_ARG, "window needs >= 1 sample, got %d",
+                                win->n_samples);
+    if (!isfinite(win->t0))
+        return sasnav_set_error(SASNAV_ERR_ARG, "window start t0 is not finite");
+    return SASNAV_OK;
+}
+
+int sasnav_run_alloc(const sasnav_system *sys, const sasnav_array *array,
+                     const sasnav_window *win, int n_pings, int with_truth, sasnav_run **run)
+{
+    if (!run) return sasnav_set_error(SASNAV_ERR_ARG, "run output pointer is NULL");
+    *run = NULL;
+    if (!sys) return sasnav_set_error(SASNAV_ERR_ARG, "system is NULL");
+    int rc = sasnav_system_check(sys);
+    if (rc) return rc;
+    rc = sasnav_array_check(array);
+    if (rc) return rc;
+    rc = window_check(win);
+    if (rc) return rc;
+    if (n_pings < 1) return sasnav_set_error(SASNAV_ERR_ARG, "run needs >= 1 ping, got %d", n_pings);
+    size_t n = run_sample_count(n_pings, array->n_rx, win->n_samples);
+    if (n == 0)
+        return sasnav_set_error(SASNAV_ERR_ARG, "run of %d pings x %d channels x %d samples is too large",
+                                n_pings, array->n_rx, win->n_samples);
+
+    sasnav_run *r = calloc(1, sizeof *r);
+    if (!r) return sasnav_set_error(SASNAV_ERR_NOMEM, "cannot allocate a run");
+    r->sys = *sys;
+    r->array = *array;
+    r->win = *win;
+    r->n_pings = n_pings;
+    r->raw = calloc(n, sizeof *r->raw);
+    r->nav = calloc((size_t)n_pings, sizeof *r->nav);
+    if (with_truth) r->truth = calloc((size_t)n_pings, sizeof *r->truth);
+    if (!r->raw || !r->nav || (with_truth && !r->truth)) {
+        sasnav_run_free(r);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "cannot allocate a run of %zu samples", n);
+    }
+    *run = r;
+    return SASNAV_OK;
+}
+
+sasnav_cfloat *sasnav_run_ping(const sasnav_run *run, int p)
+{
+    if (!run || !run->raw || p < 0 || p >= run->n_pings) return NULL;
+    return run->raw + (size_t)p * (size_t)run->array.n_rx * (size_t)run->win.n_samples;
+}
+
+static int pose_finite(sasnav_pose a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.theta); }
+
+static int poses_check(const sasnav_ping_pose *poses, int n, const char *what)
+{
+    for (int p = 0; p < n; p++)
+        if (!pose_finite(poses[p].tx) || !pose_finite(poses[p].array))
+            return sasnav_set_error(SASNAV_ERR_ARG, "%s of ping %d is not finite", what, p);
+    return SASNAV_OK;
+}
+
+int sasnav_run_check(const sasnav_run *run)
+{
+    if (!run) return sasnav_set_error(SASNAV_ERR_ARG, "run is NULL");
+    int rc = sasnav_system_check(&run->sys);
+    if (rc) return rc;
+    rc = sasnav_array_check(&run->array);
+    if (rc) return rc;
+    rc = window_check(&run->win);
+    if (rc) return rc;
+    if (run->n_pings < 1)
+        return sasnav_set_error(SASNAV_ERR_ARG, "run needs >= 1 ping, got %d", run->n_pings);
+    size_t n = run_sample_count(run->n_pings, run->array.n_rx, run->win.n_samples);
+    if (n == 0) return sasnav_set_error(SASNAV_ERR_ARG, "run dimensions overflow");
+    if (!run->raw || !run->nav) return sasnav_set_error(SASNAV_ERR_ARG, "run data or navigation is NULL");
+    if (!isfinite(run->ping_spacing) || !isfinite(run->tx_lag))
+        return sasnav_set_error(SASNAV_ERR_ARG, "ping spacing and Tx lag must be finite");
+    if (!isfinite(run->speed) || run->speed < 0)
+        return sasnav_set_error(SASNAV_ERR_ARG, "speed must be finite and >= 0, got %g", run->speed);
+    if (!isfinite(run->range_of_interest) || run->range_of_interest < 0)
+        return sasnav_set_error(SASNAV_ERR_ARG, "range of interest must be finite and >= 0, got %g",
+                                run->range_of_interest);
+    rc = poses_check(run->nav, run->n_pings, "navigation");
+    if (rc) return rc;
+    if (run->truth) {
+        rc = poses_check(run->truth, run->n_pings, "true pose");
+        if (rc) return rc;
+    }
+    const float *v = (const float *)run->raw; /* C11 6.2.5: complex = float[2] */
+    for (size_t k = 0; k < 2 * n; k++)
+        if (!isfinite(v[k])) {
+            size_t s = k / 2, per_ping = n / (size_t)run->n_pings;
+            return sasnav_set_error(SASNAV_ERR_ARG,
+                                    "raw sample %zu of channel %zu of ping %zu is not finite",
+                                    s % (size_t)run->win.n_samples,
+                                    (s % per_ping) / (size_t)run->win.n_samples, s / per_ping);
+        }
+    return SASNAV_OK;
+}
+
+void sasnav_run_free(sasnav_run *run)
+{
+    if (!run) return;
+    free(run->raw);
+    free(run->nav);
+    free(run->truth);
+    free(run);
+}

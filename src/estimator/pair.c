@@ -1,0 +1,363 @@
+/* The subspace-intersection error functions (paper Section III, SPEC 3).
+ *
+ * Two "levels" share the code: level 0 (coarse pixels, coarse k and i) for
+ * the global stage and level 1 (full pixels, final k and i). Each level owns
+ * the operators of p and q on its grid, the fixed reconstruction rho_p of
+ * ping p (computed once per level: reuse of p's work across evaluations),
+ * and work buffers. */
+#include "pair_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void sasnav_pair_default_opts(sasnav_pair_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->k = 5;
+    o->i = 5;
+    o->coarse_k = 2;
+    o->coarse_i = 1;
+    o->tikhonov = 0.0;
+    o->norm = SASNAV_NORM_MAX;
+    o->tx_lag = 0.10;
+    o->range = 10.0;
+    o->range_extent = 1.6;
+    o->cross_extent = 1.0;
+    o->pixel = 0.0;
+    o->coarse_pixel = 0.0;
+    o->blur = 0.075;
+    o->box = (sasnav_pose){0.06, 0.035, 0.06};
+    o->grid_step = (sasnav_pose){0.01, 0.01, 0.01};
+    o->global_stage = 1;
+    o->min_overlap = 1e-3;
+    o->max_evaluations = 400;
+    o->nthreads = 0;
+    sasnav_op_default_opts(&o->op);
+}
+
+static double nrm2(const sasnav_cfloat *v, size_t n)
+{
+    double s = 0;
+    for (size_t j = 0; j < n; j++) {
+        double re = crealf(v[j]), im = cimagf(v[j]);
+        s += re * re + im * im;
+    }
+    return sqrt(s);
+}
+
+static void level_free(pair_level *lv)
+{
+    sasnav_op_destroy(lv->op_p);
+    sasnav_op_destroy(lv->op_q);
+    free(lv->rho_p);
+    free(lv->rho_q);
+    free(lv->psi_p);
+    free(lv->psi_q);
+    free(lv->tmp);
+    free(lv->data_tmp);
+    free(lv->cgls_work);
+    free(lv->mod_p);
+    free(lv->mod_q);
+    free(lv->blur_tmp);
+    memset(lv, 0, sizeof *lv);
+}
+
+static int level_init(sasnav_pair *pr, pair_level *lv, double pixel, int k, int i)
+{
+    const sasnav_pair_opts *o = &pr->opts;
+    int nx = (int)floor(o->cross_extent / pixel) + 1;
+    int ny = (int)floor(o->range_extent / pixel) + 1;
+    if (nx < 2 || ny < 2)
+        return sasnav_set_error(SASNAV_ERR_ARG, "estimation grid too small (%d x %d)", ny, nx);
+    lv->k = k;
+    lv->i = i;
+    /* Placed around x = 0 here; sasnav_pair_set_data recentres it between
+     * the pings by rebuilding the operators' points. */
+    int rc = sasnav_grid_make(-0.5 * (nx - 1) * pixel, 0.5 * (nx - 1) * pixel, nx,
+                              o->range - 0.5 * (ny - 1) * pixel, o->range + 0.5 * (ny - 1) * pixel,
+                              ny, &lv->grid);
+    if (rc) return rc;
+    lv->np = (size_t)nx * ny;
+    lv->nd = (size_t)pr->array.n_rx * pr->win.n_samples;
+    size_t np = lv->np, nd = lv->nd;
+    lv->rho_p = malloc(sizeof(sasnav_cfloat) * np);
+    lv->rho_q = malloc(sizeof(sasnav_cfloat) * np);
+    lv->psi_p = malloc(sizeof(sasnav_cfloat) * np);
+    lv->psi_q = malloc(sizeof(sasnav_cfloat) * np);
+    lv->tmp = malloc(sizeof(sasnav_cfloat) * np);
+    lv->data_tmp = malloc(sizeof(sasnav_cfloat) * nd);
+    lv->cgls_work = malloc(sizeof(sasnav_cfloat) * (2 * np + 2 * nd));
+    lv->mod_p = malloc(sizeof(double) * np);
+    lv->mod_q = malloc(sizeof(double) * np);
+    lv->blur_tmp = malloc(sizeof(double) * np);
+    if (!lv->rho_p || !lv->rho_q || !lv->psi_p || !lv->psi_q || !lv->tmp || !lv->data_tmp ||
+        !lv->cgls_work || !lv->mod_p || !lv->mod_q || !lv->blur_tmp)
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for the estimator");
+    return SASNAV_OK;
+}
+
+static int level_make_ops(sasnav_pair *pr, pair_level *lv, double xcentre)
+{
+    sasnav_op_destroy(lv->op_p);
+    sasnav_op_destroy(lv->op_q);
+    lv->op_p = lv->op_q = NULL;
+    double w = (lv->grid.nx - 1) * lv->grid.dx;
+    lv->grid.x0 = xcentre - 0.5 * w;
+    double *x = malloc(sizeof(double) * lv->np), *y = malloc(sizeof(double) * lv->np);
+    if (!x || !y) {
+        free(x);
+        free(y);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for the estimator grid");
+    }
+    sasnav_pose id = {0, 0, 0};
+    sasnav_grid_points(&lv->grid, id, x, y);
+    sasnav_op_opts oo = pr->opts.op;
+    oo.nthreads = pr->opts.nthreads;
+    int rc = sasnav_op_create(&pr->sys, &pr->array, &pr->win, (int)lv->np, x, y, &oo, &lv->op_p);
+    if (!rc) rc = sasnav_op_create(&pr->sys, &pr->array, &pr->win, (int)lv->np, x, y, &oo, &lv->op_q);
+    free(x);
+    free(y);
+    if (rc) return rc;
+    /* Ping p sits at the origin of its own centroid frame. */
+    rc = sasnav_op_set_geometry(lv->op_p, &pr->local);
+    if (rc) return rc;
+    sasnav_cgls_opts co = {lv->k, pr->opts.tikhonov};
+    rc = sasnav_cgls(lv->op_p, pr->data_p, &co, lv->rho_p, lv->cgls_work);
+    pr->applications += 1 + 2L * lv->k;
+    if (rc) return rc;
+    lv->rho_p_norm = nrm2(lv->rho_p, lv->np);
+    if (!(lv->rho_p_norm > 0))
+        return sasnav_set_error(SASNAV_ERR_NO_OVERLAP,
+                                "ping p sees nothing on the estimation grid (range %g m): "
+                                "check the range of interest", pr->opts.range);
+    return SASNAV_OK;
+}
+
+int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
+                       const sasnav_window *win, const sasnav_pair_opts *opts,
+                       sasnav_pair **out)
+{
+    if (!sys || !array || !win || !out) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    *out = NULL;
+    int rc = sasnav_system_check(sys);
+    if (!rc) rc = sasnav_array_check(array);
+    if (rc) return rc;
+    if (win->n_samples < 1) return sasnav_set_error(SASNAV_ERR_ARG, "empty sample window");
+    sasnav_pair *pr = calloc(1, sizeof *pr);
+    if (!pr) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    pr->sys = *sys;
+    pr->array = *array;
+    pr->win = *win;
+    if (opts) pr->opts = *opts;
+    else sasnav_pair_default_opts(&pr->opts);
+    sasnav_pair_opts *o = &pr->opts;
+    if (o->k < 1 || o->i < 1 || o->coarse_k < 1 || o->coarse_i < 1 || !(o->range > 0) ||
+        !(o->range_extent > 0) || !(o->cross_extent > 0) || !(o->tx_lag >= 0) ||
+        !isfinite(o->range + o->range_extent + o->cross_extent + o->tx_lag + o->blur) ||
+        !(o->blur >= 0) || !(o->box.x >= 0 && o->box.y >= 0 && o->box.theta >= 0)) {
+        free(pr);
+        return sasnav_set_error(SASNAV_ERR_ARG, "invalid estimator options");
+    }
+    if (!(o->pixel > 0)) {
+        o->pixel = sys->sound_speed / (4.0 * sys->bandwidth);
+        if (array->rx_length > 0 && array->rx_length / 4.0 < o->pixel) o->pixel = array->rx_length / 4.0;
+    }
+    if (!(o->coarse_pixel > 0)) o->coarse_pixel = 2.0 * o->pixel;
+    pr->local = sasnav_epca_local(o->tx_lag, 0.0);
+    pr->nd = (size_t)array->n_rx * win->n_samples;
+    pr->data_p = malloc(sizeof(sasnav_cfloat) * pr->nd);
+    pr->data_q = malloc(sizeof(sasnav_cfloat) * pr->nd);
+    if (!pr->data_p || !pr->data_q) {
+        sasnav_pair_destroy(pr);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    }
+    rc = level_init(pr, &pr->level[0], o->coarse_pixel, o->coarse_k, o->coarse_i);
+    if (!rc) rc = level_init(pr, &pr->level[1], o->pixel, o->k, o->i);
+    if (rc) {
+        sasnav_pair_destroy(pr);
+        return rc;
+    }
+    *out = pr;
+    return SASNAV_OK;
+}
+
+void sasnav_pair_destroy(sasnav_pair *pr)
+{
+    if (!pr) return;
+    level_free(&pr->level[0]);
+    level_free(&pr->level[1]);
+    free(pr->data_p);
+    free(pr->data_q);
+    free(pr);
+}
+
+static int check_channels(const sasnav_pair *pr, const sasnav_cfloat *d, const char *which)
+{
+    int ns = pr->win.n_samples;
+    for (int l = 0; l < pr->array.n_rx; l++) {
+        double e = 0;
+        for (int m = 0; m < ns; m++) {
+            sasnav_cfloat v = d[(size_t)l * ns + m];
+            if (!isfinite(crealf(v)) || !isfinite(cimagf(v)))
+                return sasnav_set_error(SASNAV_ERR_ARG, "ping %s channel %d holds a non-finite sample",
+                                        which, l);
+            e += crealf(v) * crealf(v) + cimagf(v) * cimagf(v);
+        }
+        if (!(e > 0))
+            return sasnav_set_error(SASNAV_ERR_ARG, "ping %s channel %d is empty (missing channel)",
+                                    which, l);
+    }
+    return SASNAV_OK;
+}
+
+int sasnav_pair_set_data(sasnav_pair *pr, const sasnav_cfloat *data_p,
+                         const sasnav_cfloat *data_q, sasnav_pose nominal)
+{
+    if (!pr || !data_p || !data_q) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    if (!isfinite(nominal.x) || !isfinite(nominal.y) || !isfinite(nominal.theta))
+        return sasnav_set_error(SASNAV_ERR_ARG, "nominal displacement is not finite");
+    int rc = check_channels(pr, data_p, "p");
+    if (!rc) rc = check_channels(pr, data_q, "q");
+    if (rc) return rc;
+    if (data_p == data_q || !memcmp(data_p, data_q, sizeof(sasnav_cfloat) * pr->nd))
+        return sasnav_set_error(SASNAV_ERR_ARG, "pings p and q hold identical data (the same ping twice?)");
+    memcpy(pr->data_p, data_p, sizeof(sasnav_cfloat) * pr->nd);
+    memcpy(pr->data_q, data_q, sizeof(sasnav_cfloat) * pr->nd);
+    pr->nominal = nominal;
+    double xc = 0.5 * nominal.x;
+    for (int v = 0; v < 2 && !rc; v++) rc = level_make_ops(pr, &pr->level[v], xc);
+    pr->ready = (rc == 0);
+    return rc;
+}
+
+/* out = Q x = T^+ (T x) with the operator's current geometry. */
+static int project(sasnav_pair *pr, pair_level *lv, sasnav_op *op, const sasnav_cfloat *x,
+                   sasnav_cfloat *out)
+{
+    int rc = sasnav_op_forward(op, x, lv->data_tmp);
+    if (rc) return rc;
+    sasnav_cgls_opts co = {lv->k, pr->opts.tikhonov};
+    rc = sasnav_cgls(op, lv->data_tmp, &co, out, lv->cgls_work);
+    pr->applications += 2 + 2L * lv->k;
+    return rc;
+}
+
+/* Separable Gaussian blur of a real map (sigma in pixels), zero outside. */
+static void blur_map(const sasnav_grid *g, double sigma_m, double *f, double *tmp)
+{
+    int nx = g->nx, ny = g->ny;
+    double sx = sigma_m / g->dx, sy = sigma_m / g->dy;
+    int hx = (int)ceil(3 * sx), hy = (int)ceil(3 * sy);
+    double kx[256], ky[256];
+    if (hx > 127) hx = 127;
+    if (hy > 127) hy = 127;
+    double s = 0;
+    for (int j = -hx; j <= hx; j++) s += (kx[j + hx] = exp(-0.5 * j * j / (sx * sx)));
+    for (int j = -hx; j <= hx; j++) kx[j + hx] /= s;
+    s = 0;
+    for (int j = -hy; j <= hy; j++) s += (ky[j + hy] = exp(-0.5 * j * j / (sy * sy)));
+    for (int j = -hy; j <= hy; j++) ky[j + hy] /= s;
+    for (int iy = 0; iy < ny; iy++)
+        for (int ix = 0; ix < nx; ix++) {
+            double a = 0;
+            for (int j = -hx; j <= hx; j++) {
+                int jx = ix + j;
+                if (jx >= 0 && jx < nx) a += kx[j + hx] * f[iy * nx + jx];
+            }
+            tmp[iy * nx + ix] = a;
+        }
+    for (int iy = 0; iy < ny; iy++)
+        for (int ix = 0; ix < nx; ix++) {
+            double a = 0;
+            for (int j = -hy; j <= hy; j++) {
+                int jy = iy + j;
+                if (jy >= 0 && jy < ny) a += ky[j + hy] * tmp[jy * nx + ix];
+            }
+            f[iy * nx + ix] = a;
+        }
+}
+
+int sasnav_pair_eval(sasnav_pair *pr, sasnav_pose error, int level, int blurred, double *zeta,
+                     double *eta, double *overlap)
+{
+    if (!pr || level < 0 || level > 1) return sasnav_set_error(SASNAV_ERR_ARG, "bad evaluation arguments");
+    if (!pr->ready) return sasnav_set_error(SASNAV_ERR_ARG, "estimator has no data (call set_data)");
+    if (!isfinite(error.x) || !isfinite(error.y) || !isfinite(error.theta))
+        return sasnav_set_error(SASNAV_ERR_ARG, "hypothesis is not finite");
+    pair_level *lv = &pr->level[level];
+    size_t np = lv->np;
+    sasnav_pose sigma = {pr->nominal.x + error.x, pr->nominal.y + error.y,
+                         pr->nominal.theta + error.theta};
+    /* Move q's sensors: T_q(sigma) = q's EPCA geometry placed at sigma. */
+    sasnav_ping_pose q = sasnav_ping_place(sigma, &pr->local);
+    int rc = sasnav_op_set_geometry(lv->op_q, &q);
+    if (rc) return rc;
+    sasnav_cgls_opts co = {lv->k, pr->opts.tikhonov};
+    rc = sasnav_cgls(lv->op_q, pr->data_q, &co, lv->rho_q, lv->cgls_work);
+    pr->applications += 1 + 2L * lv->k;
+    if (rc) return rc;
+    /* psi_p = (Q_p Q_q)^i rho_p */
+    memcpy(lv->psi_p, lv->rho_p, sizeof(sasnav_cfloat) * np);
+    for (int it = 0; it < lv->i && !rc; it++) {
+        rc = project(pr, lv, lv->op_q, lv->psi_p, lv->tmp);
+        if (!rc) rc = project(pr, lv, lv->op_p, lv->tmp, lv->psi_p);
+    }
+    /* psi_q = (Q_q Q_p)^i rho_q */
+    memcpy(lv->psi_q, lv->rho_q, sizeof(sasnav_cfloat) * np);
+    for (int it = 0; it < lv->i && !rc; it++) {
+        rc = project(pr, lv, lv->op_p, lv->psi_q, lv->tmp);
+        if (!rc) rc = project(pr, lv, lv->op_q, lv->tmp, lv->psi_q);
+    }
+    if (rc) return rc;
+    pr->evaluations++;
+    double np_ = nrm2(lv->psi_p, np), nq_ = nrm2(lv->psi_q, np);
+    if (overlap) *overlap = np_ / lv->rho_p_norm;
+    double nrm = 1.0;
+    switch (pr->opts.norm) {
+    case SASNAV_NORM_P: nrm = np_; break;
+    case SASNAV_NORM_Q: nrm = nq_; break;
+    case SASNAV_NORM_NONE: nrm = 1.0; break;
+    default: nrm = np_ > nq_ ? np_ : nq_; break;
+    }
+    if (!(nrm > 0)) nrm = 1.0;
+    if (eta) {
+        double s = 0;
+        for (size_t j = 0; j < np; j++) {
+            sasnav_cfloat d = lv->psi_p[j] - lv->psi_q[j];
+            s += (double)crealf(d) * crealf(d) + (double)cimagf(d) * cimagf(d);
+        }
+        *eta = sqrt(s) / nrm;
+    }
+    if (zeta) {
+        for (size_t j = 0; j < np; j++) {
+            lv->mod_p[j] = cabsf(lv->psi_p[j]);
+            lv->mod_q[j] = cabsf(lv->psi_q[j]);
+        }
+        double bn = nrm;
+        if (blurred && pr->opts.blur > 0) {
+            blur_map(&lv->grid, pr->opts.blur, lv->mod_p, lv->blur_tmp);
+            blur_map(&lv->grid, pr->opts.blur, lv->mod_q, lv->blur_tmp);
+            double a = 0, b = 0;
+            for (size_t j = 0; j < np; j++) {
+                a += lv->mod_p[j] * lv->mod_p[j];
+                b += lv->mod_q[j] * lv->mod_q[j];
+            }
+            a = sqrt(a);
+            b = sqrt(b);
+            bn = pr->opts.norm == SASNAV_NORM_P ? a : pr->opts.norm == SASNAV_NORM_Q ? b
+                 : pr->opts.norm == SASNAV_NORM_NONE ? 1.0 : (a > b ? a : b);
+            if (!(bn > 0)) bn = 1.0;
+        }
+        double s = 0;
+        for (size_t j = 0; j < np; j++) {
+            double d = lv->mod_p[j] - lv->mod_q[j];
+            s += d * d;
+        }
+        *zeta = sqrt(s) / bn;
+    }
+    return SASNAV_OK;
+}
+
+const sasnav_grid *sasnav_pair_grid(const sasnav_pair *pr) { return &pr->level[1].grid; }
+long sasnav_pair_applications(const sasnav_pair *pr) { return pr->applications; }

@@ -1,0 +1,225 @@
+/* The search for the displacement (paper Section III-A, procedure 1-3, and
+ * docs/estimator.md):
+ *   0. global stage: grid search of a blurred zeta at coarse pixels and
+ *      coarse (k, i) over the search box: first (surge, yaw) with sway at
+ *      the prior, then sway at the best (surge, yaw), then a bounded local
+ *      refinement of the blurred zeta (NLopt BOBYQA);
+ *   1. zeta stage: local minimisation of zeta (coarse k, i; full pixels is
+ *      level 1 with coarse iterations is not offered: level 1 is used) from
+ *      the global result;
+ *   2. eta stage: local minimisation of eta from the zeta result, started
+ *      also one sway fringe (lambda/2) either side when eta there is lower.
+ * Steps and bounds derive from the geometry: phase-centre spacing, range and
+ * wavelength. */
+#include "pair_internal.h"
+
+#include <math.h>
+#include <nlopt.h>
+#include <string.h>
+#include <time.h>
+
+typedef struct {
+    sasnav_pair *pr;
+    int level, blurred, use_eta;
+    sasnav_pose centre, scale;
+    int rc;
+    int evals;
+} stage_ctx;
+
+static sasnav_pose from_unit(const stage_ctx *c, const double *u)
+{
+    sasnav_pose e = {c->centre.x + c->scale.x * u[0], c->centre.y + c->scale.y * u[1],
+                     c->centre.theta + c->scale.theta * u[2]};
+    return e;
+}
+
+static double stage_objective(unsigned n, const double *u, double *grad, void *data)
+{
+    stage_ctx *c = data;
+    (void)n;
+    (void)grad;
+    if (c->rc) return HUGE_VAL;
+    double zeta = 0, eta = 0;
+    int rc = sasnav_pair_eval(c->pr, from_unit(c, u), c->level, c->blurred,
+                              c->use_eta ? NULL : &zeta, c->use_eta ? &eta : NULL, NULL);
+    c->evals++;
+    if (rc) {
+        c->rc = rc;
+        return HUGE_VAL;
+    }
+    return c->use_eta ? eta : zeta;
+}
+
+/* Bounded local minimisation in units scaled so that one unit = one step;
+ * bounds +-half_width steps around the start. */
+static int local_stage(stage_ctx *c, sasnav_pose start, sasnav_pose step, double half_width,
+                       double xtol_units, int max_evals, sasnav_pose *best, double *fbest)
+{
+    c->centre = start;
+    c->scale = step;
+    c->evals = 0;
+    c->rc = 0;
+    nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, 3);
+    if (!opt) return sasnav_set_error(SASNAV_ERR_NOMEM, "NLopt could not create an optimiser");
+    double lb[3] = {-half_width, -half_width, -half_width}, ub[3] = {half_width, half_width, half_width};
+    double dx[3] = {0.5, 0.5, 0.5}, u[3] = {0, 0, 0};
+    nlopt_set_lower_bounds(opt, lb);
+    nlopt_set_upper_bounds(opt, ub);
+    nlopt_set_initial_step(opt, dx);
+    nlopt_set_min_objective(opt, stage_objective, c);
+    nlopt_set_xtol_abs1(opt, xtol_units);
+    nlopt_set_maxeval(opt, max_evals);
+    double f = HUGE_VAL;
+    nlopt_result res = nlopt_optimize(opt, u, &f);
+    nlopt_destroy(opt);
+    if (c->rc) return c->rc;
+    if (res < 0 && res != NLOPT_ROUNDOFF_LIMITED)
+        return sasnav_set_error(SASNAV_ERR_NOT_CONVERGED, "NLopt failed (code %d)", (int)res);
+    *best = from_unit(c, u);
+    *fbest = f;
+    return res == NLOPT_MAXEVAL_REACHED ? SASNAV_ERR_NOT_CONVERGED : SASNAV_OK;
+}
+
+static int global_stage(sasnav_pair *pr, sasnav_pose *best, int *evals)
+{
+    const sasnav_pair_opts *o = &pr->opts;
+    sasnav_pose c = o->prior, s = o->grid_step, b = o->box;
+    int nx = s.x > 0 ? (int)floor(b.x / s.x) : 0;
+    int ny = s.y > 0 ? (int)floor(b.y / s.y) : 0;
+    int nt = s.theta > 0 ? (int)floor(b.theta / s.theta) : 0;
+    double fbest = HUGE_VAL;
+    sasnav_pose e = c, arg = c;
+    int n = 0, rc;
+    for (int ix = -nx; ix <= nx; ix++)
+        for (int it = -nt; it <= nt; it++) {
+            e.x = c.x + ix * s.x;
+            e.theta = c.theta + it * s.theta;
+            e.y = c.y;
+            double z;
+            if ((rc = sasnav_pair_eval(pr, e, 0, 1, &z, NULL, NULL))) return rc;
+            n++;
+            if (z < fbest) {
+                fbest = z;
+                arg = e;
+            }
+        }
+    e = arg;
+    for (int iy = -ny; iy <= ny; iy++) {
+        if (iy == 0) continue;
+        e.y = c.y + iy * s.y;
+        double z;
+        if ((rc = sasnav_pair_eval(pr, e, 0, 1, &z, NULL, NULL))) return rc;
+        n++;
+        if (z < fbest) {
+            fbest = z;
+            arg = e;
+        }
+    }
+    /* Bounded local refinement of the blurred zeta, one grid step around. */
+    stage_ctx ctx = {pr, 0, 1, 0, {0}, {0}, 0, 0};
+    sasnav_pose refined;
+    double f;
+    rc = local_stage(&ctx, arg, s, 1.5, 0.02, o->max_evaluations, &refined, &f);
+    n += ctx.evals;
+    *evals = n;
+    if (rc && rc != SASNAV_ERR_NOT_CONVERGED) return rc;
+    *best = f < fbest ? refined : arg;
+    return SASNAV_OK;
+}
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
+{
+    if (!pr || !res) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    memset(res, 0, sizeof *res);
+    if (!pr->ready) return sasnav_set_error(SASNAV_ERR_ARG, "estimator has no data (call set_data)");
+    double t0 = now_seconds();
+    long apps0 = pr->applications;
+    const sasnav_pair_opts *o = &pr->opts;
+    double lambda = sasnav_wavelength(&pr->sys);
+    double range = o->range;
+    double pc_spacing = pr->array.n_rx > 1 ? fabs(pr->array.rx_u[1] - pr->array.rx_u[0]) / 2.0 : 0.025;
+
+    /* Overlap check at the prior. */
+    double ov = 0;
+    int rc = sasnav_pair_eval(pr, o->prior, 0, 0, NULL, NULL, &ov);
+    if (rc) return rc;
+    if (!(ov >= o->min_overlap)) {
+        res->status = SASNAV_ERR_NO_OVERLAP;
+        res->overlap = ov;
+        return sasnav_set_error(SASNAV_ERR_NO_OVERLAP,
+                                "pings share no observed scene at the prior (kept energy %.2g < %.2g)",
+                                ov, o->min_overlap);
+    }
+
+    sasnav_pose start = o->prior;
+    int nglob = 0;
+    if (o->global_stage) {
+        rc = global_stage(pr, &start, &nglob);
+        if (rc) return rc;
+    }
+    res->global_stage = start;
+    res->evaluations_global = nglob;
+
+    /* Zeta stage: steps of a tenth of a phase-centre spacing in surge and
+     * sway, and the yaw that moves the scene by that much at the range. */
+    stage_ctx ctx = {pr, 1, 0, 0, {0}, {0}, 0, 0};
+    sasnav_pose zstep = {0.2 * pc_spacing, 0.2 * pc_spacing, 0.2 * pc_spacing / range};
+    sasnav_pose zbest;
+    double zval;
+    int zrc = local_stage(&ctx, start, zstep, 10.0, 0.01, o->max_evaluations, &zbest, &zval);
+    res->evaluations_zeta = ctx.evals;
+    if (zrc && zrc != SASNAV_ERR_NOT_CONVERGED) return zrc;
+    res->zeta_stage = zbest;
+    res->zeta = zval;
+
+    /* Eta stage: steps lambda/40 in sway (bounds +-lambda/4: one fringe),
+     * a 25th of the phase-centre spacing in surge and twice the matching
+     * yaw (bounds +-10 steps). Try the fringes on each side of the zeta
+     * result when eta is lower there. */
+    ctx.use_eta = 1;
+    sasnav_pose estep = {pc_spacing / 25.0, lambda / 40.0, 2.0 * pc_spacing / 25.0 / range};
+    sasnav_pose best = zbest;
+    double fbest = HUGE_VAL;
+    int erc = SASNAV_OK, nevals = 0;
+    for (int fringe = 0; fringe < 3; fringe++) {
+        sasnav_pose s0 = zbest;
+        s0.y += (fringe == 0 ? 0.0 : fringe == 1 ? -0.5 : 0.5) * lambda;
+        if (fringe > 0) {
+            double e0;
+            rc = sasnav_pair_eval(pr, s0, 1, 0, NULL, &e0, NULL);
+            nevals++;
+            if (rc) return rc;
+            if (!(e0 < fbest)) continue;
+        }
+        sasnav_pose b;
+        double f;
+        int r = local_stage(&ctx, s0, estep, 10.0, 0.01, o->max_evaluations, &b, &f);
+        nevals += ctx.evals;
+        if (r && r != SASNAV_ERR_NOT_CONVERGED) return r;
+        if (f < fbest) {
+            fbest = f;
+            best = b;
+            erc = r;
+        }
+    }
+    res->evaluations_eta = nevals;
+    res->eta = fbest;
+    res->error = best;
+    res->displacement = (sasnav_pose){pr->nominal.x + best.x, pr->nominal.y + best.y,
+                                      pr->nominal.theta + best.theta};
+    rc = sasnav_pair_eval(pr, best, 1, 0, NULL, NULL, &res->overlap);
+    if (rc) return rc;
+    res->evaluations = 1 + nglob + res->evaluations_zeta + res->evaluations_eta + 1;
+    res->applications = pr->applications - apps0;
+    res->seconds = now_seconds() - t0;
+    res->status = (zrc || erc) ? SASNAV_ERR_NOT_CONVERGED : SASNAV_OK;
+    if (res->overlap < o->min_overlap) res->status = SASNAV_ERR_NO_OVERLAP;
+    return SASNAV_OK;
+}

@@ -1,0 +1,31 @@
+#include "testutil.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+int test_failures = 0;
+int test_checks = 0;
+
+int test_summary(const char *name)
+{
+    printf("%s: %d checks, %d failures\n", name, test_checks, test_failures);
+    if (test_checks == 0) {
+        printf("%s: no checks ran\n", name);
+        return 1;
+    }
+    return test_failures ? 1 : 0;
+}
+
+const char *test_tmpdir(void)
+{
+    static char dir[256];
+    if (!dir[0]) {
+        const char *base = getenv("TMPDIR");
+        snprintf(dir, sizeof dir, "%s/sasnav-test-XXXXXX", base ? base : "/tmp");
+        if (!mkdtemp(dir)) {
+            perror("mkdtemp");
+            exit(2);
+        }
+    }
+    return dir;
+}

@@ -1,0 +1,34 @@
+/* Minimal test helpers: CHECK macros that report file:line and count
+ * failures; a test returns test_summary() from main. */
+#ifndef SASNAV_TESTUTIL_H
+#define SASNAV_TESTUTIL_H
+
+#include <stdio.h>
+
+extern int test_failures;
+extern int test_checks;
+
+#define CHECK(cond, ...)                                                         \
+    do {                                                                         \
+        test_checks++;                                                           \
+        if (!(cond)) {                                                           \
+            test_failures++;                                                     \
+            fprintf(stderr, "%s:%d: CHECK failed: %s: ", __FILE__, __LINE__, #cond); \
+            fprintf(stderr, __VA_ARGS__);                                        \
+            fprintf(stderr, "\n");                                               \
+        }                                                                        \
+    } while (0)
+
+#define CHECK_OK(expr)                                                           \
+    do {                                                                         \
+        int rc_ = (expr);                                                        \
+        CHECK(rc_ == 0, "%s returned %d (%s)", #expr, rc_, sasnav_last_error()); \
+    } while (0)
+
+/* Prints a summary and returns the process exit status (0 = pass). */
+int test_summary(const char *name);
+
+/* A fresh temporary directory for the test's files (created, mkdtemp). */
+const char *test_tmpdir(void);
+
+#endif
