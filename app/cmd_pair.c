@@ -220,4 +220,3 @@ int cmd_pair(int argc, char **argv)
     return 0;
 }
 
-int cmd_cuts(int argc, char **argv) { return cli_fail("cuts", 0, "not available yet"); }

@@ -16,8 +16,8 @@
 
 typedef struct {
     int width, height;
-    double variance;   /* of the grey level (0..255) over all pixels */
-    int n_colours;     /* distinct RGB values, capped at 4096 */
+    double variance; /* of the grey level (0..255) over all pixels */
+    int n_colours;   /* distinct RGB values, capped at 4096 */
 } png_stats;
 
 /* Reads a PNG with libpng's simplified API; returns 0 on success. */
@@ -163,8 +163,17 @@ static void test_lines(const char *dir)
     const double *xs[3] = {x, x, x}, *ys[3] = {y0, y1, y2};
     const int ns[3] = {N, N, N};
     const char *labels[3] = {"zeta (blurred)", "zeta", NULL};
-    sasnav_line_plot p = {"cost along surge", "surge error (m)", "normalised error", 3, ns,
-                          xs, ys, labels, 0, 0.02, NAN};
+    sasnav_line_plot p = {"cost along surge",
+                          "surge error (m)",
+                          "normalised error",
+                          3,
+                          ns,
+                          xs,
+                          ys,
+                          labels,
+                          0,
+                          0.02,
+                          NAN};
     snprintf(path, sizeof path, "%s/lines.png", dir);
     CHECK_OK(sasnav_plot_lines(path, &p));
     check_png(path, 4);
@@ -266,6 +275,22 @@ static void test_quiet(const char *dir)
     unlink(log);
 }
 
+/* Removes the test's files (flat directory) unless asked to keep them. */
+static void remove_tmpdir(const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (!d) return;
+    struct dirent *e;
+    char path[1200];
+    while ((e = readdir(d))) {
+        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        unlink(path);
+    }
+    closedir(d);
+    rmdir(dir);
+}
+
 int main(void)
 {
     const char *dir = test_tmpdir();
@@ -274,6 +299,9 @@ int main(void)
     test_map(dir);
     test_cleanup_on_failure(dir);
     test_quiet(dir);
-    if (getenv("SASNAV_KEEP_PLOTS")) printf("plots kept in %s\n", dir);
+    if (getenv("SASNAV_KEEP_PLOTS"))
+        printf("plots kept in %s\n", dir);
+    else
+        remove_tmpdir(dir);
     return test_summary("test_plot");
 }

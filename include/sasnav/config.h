@@ -1,7 +1,7 @@
 /* sasnav -- scenario configuration files (YAML through libfyaml).
  * A config file starts from a preset (key `preset`, default paper-trajectory)
  * and overrides any field; comments are allowed. Keys are documented in
- * docs/config.md and examples/*.yaml. */
+ * docs/config.md and the examples/ folder. */
 #ifndef SASNAV_CONFIG_H
 #define SASNAV_CONFIG_H
 

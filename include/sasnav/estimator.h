@@ -50,7 +50,11 @@ typedef struct {
     double cross_extent;   /* m, along-track extent of the grid (default 1.0) */
     double pixel;          /* m, pixel size (default: min(D/4, c/(4B))) */
     double coarse_pixel;   /* m, pixel of the global stage (default 2 * pixel) */
-    double blur;           /* m, Gaussian blur sigma of the global stage's moduli (0.075) */
+    double blur;           /* m, range sigma of the Gaussian blur of the global
+                              stage's moduli (default 0.075) */
+    double blur_cross;     /* m, along-track sigma of that blur (default 0: the
+                              cross-range detail separates the true yaw from
+                              its grating-lobe ambiguity) */
     sasnav_pose prior;     /* prior motion error (default 0) */
     sasnav_pose box;       /* half-widths of the search box around the prior
                               (default 0.06 m, 0.035 m, 0.06 rad) */

@@ -19,7 +19,8 @@
 extern "C" {
 #endif
 
-/* Raw-data run: /raw, /nav/*, /truth/* (if known), system attributes. */
+/* Raw-data run: /raw, /nav/{tx,array}, /truth/{tx,array} (if known), system
+ * attributes. */
 int sasnav_run_write(const char *path, const sasnav_run *run);
 int sasnav_run_read(const char *path, sasnav_run **run);
 

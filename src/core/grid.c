@@ -4,6 +4,7 @@
 
 #include <limits.h>
 #include <math.h>
+#include <stddef.h>
 
 /* Pixel spacing of one axis, 0 when the axis has a single pixel. */
 static int axis_spacing(const char *name, double lo, double hi, int n, double *d)
@@ -28,7 +29,7 @@ int sasnav_grid_make(double x_min, double x_max, int nx, double y_min, double y_
                      sasnav_grid *grid)
 {
     if (!grid) return sasnav_set_error(SASNAV_ERR_ARG, "grid is NULL");
-    double dx, dy;
+    double dx = 0.0, dy = 0.0;
     int rc = axis_spacing("x", x_min, x_max, nx, &dx);
     if (rc) return rc;
     rc = axis_spacing("y", y_min, y_max, ny, &dy);

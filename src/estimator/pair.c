@@ -27,6 +27,7 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->pixel = 0.0;
     o->coarse_pixel = 0.0;
     o->blur = 0.075;
+    o->blur_cross = 0.0;
     o->box = (sasnav_pose){0.06, 0.035, 0.06};
     o->grid_step = (sasnav_pose){0.01, 0.01, 0.01};
     o->global_stage = 1;
@@ -243,11 +244,12 @@ static int project(sasnav_pair *pr, pair_level *lv, sasnav_op *op, const sasnav_
     return rc;
 }
 
-/* Separable Gaussian blur of a real map (sigma in pixels), zero outside. */
-static void blur_map(const sasnav_grid *g, double sigma_m, double *f, double *tmp)
+/* Separable Gaussian blur of a real map (sigmas in metres along track and
+ * in range; 0 = no blur along that axis), zero outside. */
+static void blur_map(const sasnav_grid *g, double sigma_x, double sigma_y, double *f, double *tmp)
 {
     int nx = g->nx, ny = g->ny;
-    double sx = sigma_m / g->dx, sy = sigma_m / g->dy;
+    double sx = sigma_x > 0 ? sigma_x / g->dx : 1e-6, sy = sigma_y > 0 ? sigma_y / g->dy : 1e-6;
     int hx = (int)ceil(3 * sx), hy = (int)ceil(3 * sy);
     double kx[256], ky[256];
     if (hx > 127) hx = 127;
@@ -336,8 +338,8 @@ int sasnav_pair_eval(sasnav_pair *pr, sasnav_pose error, int level, int blurred,
         }
         double bn = nrm;
         if (blurred && pr->opts.blur > 0) {
-            blur_map(&lv->grid, pr->opts.blur, lv->mod_p, lv->blur_tmp);
-            blur_map(&lv->grid, pr->opts.blur, lv->mod_q, lv->blur_tmp);
+            blur_map(&lv->grid, pr->opts.blur_cross, pr->opts.blur, lv->mod_p, lv->blur_tmp);
+            blur_map(&lv->grid, pr->opts.blur_cross, pr->opts.blur, lv->mod_q, lv->blur_tmp);
             double a = 0, b = 0;
             for (size_t j = 0; j < np; j++) {
                 a += lv->mod_p[j] * lv->mod_p[j];

@@ -2,6 +2,8 @@
 #ifndef SASNAV_PAIR_INTERNAL_H
 #define SASNAV_PAIR_INTERNAL_H
 
+#include <stddef.h>
+
 #include "sasnav/error.h"
 #include "sasnav/estimator.h"
 

@@ -116,7 +116,7 @@ static int global_stage(sasnav_pair *pr, sasnav_pose *best, int *evals)
         }
     }
     /* Bounded local refinement of the blurred zeta, one grid step around. */
-    stage_ctx ctx = {pr, 0, 1, 0, {0}, {0}, 0, 0};
+    stage_ctx ctx = {.pr = pr, .level = 0, .blurred = 1};
     sasnav_pose refined;
     double f;
     rc = local_stage(&ctx, arg, s, 1.5, 0.02, o->max_evaluations, &refined, &f);
@@ -169,7 +169,7 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
 
     /* Zeta stage: steps of a tenth of a phase-centre spacing in surge and
      * sway, and the yaw that moves the scene by that much at the range. */
-    stage_ctx ctx = {pr, 1, 0, 0, {0}, {0}, 0, 0};
+    stage_ctx ctx = {.pr = pr, .level = 1};
     sasnav_pose zstep = {0.2 * pc_spacing, 0.2 * pc_spacing, 0.2 * pc_spacing / range};
     sasnav_pose zbest;
     double zval;

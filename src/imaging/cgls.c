@@ -52,8 +52,10 @@ int sasnav_cgls(sasnav_op *op, const sasnav_cfloat *data, const sasnav_cgls_opts
     rc = sasnav_op_adjoint(op, r, s); /* s = T^H r - lambda x, x = 0 */
     if (rc) goto done;
     memcpy(p, s, sizeof(sasnav_cfloat) * np);
-    double gamma = norm2(s, np);
-    for (int it = 0; it < o.iterations && gamma > 0; it++) {
+    double gamma = norm2(s, np), gamma0 = gamma;
+    /* Stop once the normal-equation residual has fallen to float rounding
+     * level: further float iterations only amplify rounding noise. */
+    for (int it = 0; it < o.iterations && gamma > 1e-12 * gamma0; it++) {
         rc = sasnav_op_forward(op, p, q);
         if (rc) goto done;
         double delta = norm2(q, nd) + o.tikhonov * norm2(p, np);

@@ -57,6 +57,9 @@ int h5_open_read(h5_ctx *c, const char *const *formats, int n_formats, char *fou
 /* 1 if the object `name` (absolute path) exists, checking each component. */
 int h5_exists(h5_ctx *c, const char *name);
 
+/* 1 if object `obj` exists and has an attribute `name`. */
+int h5_attr_exists(h5_ctx *c, const char *obj, const char *name);
+
 /* Scalar attributes of object `obj` (absolute path). A double accepts any
  * integer or float type, an int any integer type. Missing, non-scalar or
  * wrong-class attributes are format errors. */
@@ -92,8 +95,10 @@ int h5_write_attr_double(h5_ctx *c, const char *obj, const char *name, double va
 int h5_write_attr_int(h5_ctx *c, const char *obj, const char *name, int value);
 int h5_write_attr_string(h5_ctx *c, const char *obj, const char *name, const char *value);
 /* Writes a chunked dataset with Fletcher-32 checksums and a `units` string
- * attribute. Real data: float64 from double; complex: {r, i} float32. */
+ * attribute (if not NULL). Real data: float64 from double; complex: {r, i}
+ * float32. chunk_hint: chunk shape, or NULL for the whole dataset (both
+ * capped at 64 MiB per chunk). */
 int h5_write_dataset(h5_ctx *c, const char *name, int kind, int rank, const hsize_t *dims,
-                     const void *data, const char *units);
+                     const hsize_t *chunk_hint, const void *data, const char *units);
 
 #endif

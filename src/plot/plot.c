@@ -202,15 +202,15 @@ static int grid_ok(const sasnav_grid *grid)
  * metre aspect ratio of the grid unless that would be more extreme than 1:3
  * (then it is clamped); otherwise (axes in different units) it is 4:3. */
 typedef struct {
-    int width, height;               /* page, pixels */
-    double vx0, vx1, vy0, vy1;       /* viewport, normalised page coordinates */
+    int width, height;         /* page, pixels */
+    double vx0, vx1, vy0, vy1; /* viewport, normalised page coordinates */
 } map_layout;
 
 static map_layout layout_map(const sasnav_grid *grid, int true_aspect)
 {
-    const double left = 110, right = 170, bottom = 90, top = 70; /* pixels */
-    double aspect = true_aspect ? (grid->ny * grid->dy) / (grid->nx * grid->dx) /* h / w */
-                                : 0.75;
+    const double left = 110, right = 170, bottom = 90, top = 70; /* margins, pixels */
+    /* aspect = height / width of the data area */
+    double aspect = true_aspect ? (grid->ny * grid->dy) / (grid->nx * grid->dx) : 0.75;
     if (aspect > 3.0) aspect = 3.0;
     if (aspect < 1.0 / 3.0) aspect = 1.0 / 3.0;
     double w = 760, h = w * aspect;
@@ -236,8 +236,8 @@ static map_layout layout_map(const sasnav_grid *grid, int true_aspect)
 /* Draws a field already scaled to [zmin, zmax] (idata[ix][iy]) as a map with
  * axes, labels, title and a colour bar labelled `bar_label`. */
 static void draw_map(const sasnav_grid *grid, PLFLT **idata, double zmin, double zmax,
-                     const map_layout *L, const char *title, const char *xlabel,
-                     const char *ylabel, const char *bar_label)
+                     const map_layout *L, const char *title, const char *xlabel, const char *ylabel,
+                     const char *bar_label)
 {
     char t[PLOT_TEXT_MAX], xl[PLOT_TEXT_MAX], yl[PLOT_TEXT_MAX], bl[PLOT_TEXT_MAX];
     double xmin = grid->x0 - 0.5 * grid->dx, xmax = grid->x0 + (grid->nx - 0.5) * grid->dx;
@@ -247,8 +247,8 @@ static void draw_map(const sasnav_grid *grid, PLFLT **idata, double zmin, double
     plvpor(L->vx0, L->vx1, L->vy0, L->vy1);
     plwind(xmin, xmax, ymin, ymax);
     /* plimage's extent is the outer edge of the pixels. */
-    plimage((PLFLT_MATRIX)idata, grid->nx, grid->ny, xmin, xmax, ymin, ymax, zmin, zmax, xmin,
-            xmax, ymin, ymax);
+    plimage((PLFLT_MATRIX)idata, grid->nx, grid->ny, xmin, xmax, ymin, ymax, zmin, zmax, xmin, xmax,
+            ymin, ymax);
     plcol0(COL_FG);
     plwidth(1.0);
     plschr(0.0, 0.95);
@@ -259,10 +259,11 @@ static void draw_map(const sasnav_grid *grid, PLFLT **idata, double zmin, double
     plschr(0.0, 1.25);
     plmtex("t", 1.6, 0.5, 0.5, plot_text(title, t, sizeof t));
 
-    /* Colour bar to the right of the viewport, full height. */
+    /* Colour bar to the right of the viewport, full height; its label is
+     * written separately above it (a colour-bar label would shift the bar
+     * off the viewport's height). Offsets are in viewport units. */
+    const double bar_gap = 0.03, bar_width = 0.035;
     PLFLT bar_w, bar_h;
-    PLINT label_opts[1] = {PL_COLORBAR_LABEL_TOP};
-    const char *labels[1] = {plot_text(bar_label, bl, sizeof bl)};
     const char *axis_opts[1] = {"bcvtsm"};
     PLFLT ticks[1] = {0.0};
     PLINT sub_ticks[1] = {0};
@@ -271,9 +272,13 @@ static void draw_map(const sasnav_grid *grid, PLFLT **idata, double zmin, double
     const PLFLT *values[1] = {range};
     plschr(0.0, 0.95);
     plcolorbar(&bar_w, &bar_h, PL_COLORBAR_IMAGE,
-               PL_POSITION_RIGHT | PL_POSITION_OUTSIDE | PL_POSITION_VIEWPORT, 0.03, 0.0, 0.035,
-               1.0, COL_BG, COL_FG, 1, 0.0, 0.0, 0, 0.0, 1, label_opts, labels, 1, axis_opts, ticks,
-               sub_ticks, n_values, values);
+               PL_POSITION_RIGHT | PL_POSITION_OUTSIDE | PL_POSITION_VIEWPORT, bar_gap, 0.0,
+               bar_width, 1.0, COL_BG, COL_FG, 1, 0.0, 0.0, 0, 0.0, 0, NULL, NULL, 1, axis_opts,
+               ticks, sub_ticks, n_values, values);
+    if (bar_label && bar_label[0]) {
+        plcol0(COL_FG);
+        plmtex("t", 1.1, 1.0 + bar_gap + 0.5 * bar_width, 0.5, plot_text(bar_label, bl, sizeof bl));
+    }
 }
 
 /* Column-major copy for PLplot: idata[ix][iy]. */
@@ -293,10 +298,11 @@ static PLFLT **alloc_columns(int nx, int ny, PLFLT **block)
 
 /* ---- public functions ---- */
 
-int sasnav_plot_image_db(const char *png_path, const sasnav_grid *grid,
-                         const sasnav_cfloat *image, double dynamic_range_db, const char *title)
+int sasnav_plot_image_db(const char *png_path, const sasnav_grid *grid, const sasnav_cfloat *image,
+                         double dynamic_range_db, const char *title)
 {
-    if (!png_path || !image) return sasnav_set_error(SASNAV_ERR_ARG, "plot_image_db: NULL argument");
+    if (!png_path || !image)
+        return sasnav_set_error(SASNAV_ERR_ARG, "plot_image_db: NULL argument");
     if (!grid_ok(grid))
         return sasnav_set_error(SASNAV_ERR_ARG, "plot_image_db: invalid image grid");
     if (!(dynamic_range_db > 0) || !isfinite(dynamic_range_db))
@@ -406,8 +412,7 @@ static int line_ranges(const sasnav_line_plot *p, line_range *r)
         }
     if (!(r->xmin <= r->xmax)) return 0;
     if (isfinite(p->vline)) r->xmin = fmin(r->xmin, p->vline), r->xmax = fmax(r->xmax, p->vline);
-    if (isfinite(p->vline2))
-        r->xmin = fmin(r->xmin, p->vline2), r->xmax = fmax(r->xmax, p->vline2);
+    if (isfinite(p->vline2)) r->xmin = fmin(r->xmin, p->vline2), r->xmax = fmax(r->xmax, p->vline2);
     if (r->xmax - r->xmin <= 1e-12 * fmax(fabs(r->xmin), fabs(r->xmax))) {
         double pad = r->xmin != 0 ? 0.05 * fabs(r->xmin) : 0.5;
         r->xmin -= pad;
@@ -445,8 +450,10 @@ static void draw_series(const sasnav_line_plot *p, int s, PLFLT *bx, PLFLT *by)
             k++;
             continue;
         }
-        if (k == 1) plpoin(1, bx, by, 1);
-        else if (k > 1) plline(k, bx, by);
+        if (k == 1)
+            plpoin(1, bx, by, 1);
+        else if (k > 1)
+            plline(k, bx, by);
         k = 0;
     }
 }
@@ -458,7 +465,8 @@ static int check_lines(const sasnav_line_plot *p, int *max_n)
         return sasnav_set_error(SASNAV_ERR_ARG, "plot_lines: needs 1 or more series with n, x, y");
     *max_n = 0;
     for (int s = 0; s < p->n_series; s++) {
-        if (p->n[s] < 0) return sasnav_set_error(SASNAV_ERR_ARG, "plot_lines: series %d has n < 0", s);
+        if (p->n[s] < 0)
+            return sasnav_set_error(SASNAV_ERR_ARG, "plot_lines: series %d has n < 0", s);
         if (p->n[s] > 0 && (!p->x[s] || !p->y[s]))
             return sasnav_set_error(SASNAV_ERR_ARG, "plot_lines: series %d has NULL data", s);
         if (p->n[s] > *max_n) *max_n = p->n[s];
@@ -471,10 +479,9 @@ static int check_lines(const sasnav_line_plot *p, int *max_n)
  * data points. */
 static PLINT legend_corner(const sasnav_line_plot *p, const line_range *r, int n_entries)
 {
-    static const PLINT corners[4] = {PL_POSITION_TOP | PL_POSITION_RIGHT,
-                                     PL_POSITION_TOP | PL_POSITION_LEFT,
-                                     PL_POSITION_BOTTOM | PL_POSITION_RIGHT,
-                                     PL_POSITION_BOTTOM | PL_POSITION_LEFT};
+    static const PLINT corners[4] = {
+        PL_POSITION_TOP | PL_POSITION_RIGHT, PL_POSITION_TOP | PL_POSITION_LEFT,
+        PL_POSITION_BOTTOM | PL_POSITION_RIGHT, PL_POSITION_BOTTOM | PL_POSITION_LEFT};
     const double box_w = 0.40, box_h = fmin(0.9, 0.05 + 0.065 * n_entries);
     long count[4] = {0, 0, 0, 0};
     for (int s = 0; s < p->n_series; s++)
@@ -482,7 +489,7 @@ static PLINT legend_corner(const sasnav_line_plot *p, const line_range *r, int n
             double x = p->x[s][i], y = plot_y(p, p->y[s][i]);
             if (!isfinite(x) || !isfinite(y)) continue;
             double u = (x - r->xmin) / (r->xmax - r->xmin), v = (y - r->ymin) / (r->ymax - r->ymin);
-            int right = u > 1 - box_w, left = u < box_w, top = v > 1 - box_h, bottom = v < box_h;
+            int right = u > 1 - box_w, left = u<box_w, top = v> 1 - box_h, bottom = v < box_h;
             count[0] += top && right;
             count[1] += top && left;
             count[2] += bottom && right;
@@ -502,7 +509,8 @@ static void draw_legend(const sasnav_line_plot *p, const line_range *r)
         if (p->labels[s]) n++;
     if (n == 0) return;
     PLINT *opt = calloc((size_t)n, sizeof *opt), *text_col = calloc((size_t)n, sizeof *text_col);
-    PLINT *line_col = calloc((size_t)n, sizeof *line_col), *line_sty = calloc((size_t)n, sizeof *line_sty);
+    PLINT *line_col = calloc((size_t)n, sizeof *line_col),
+          *line_sty = calloc((size_t)n, sizeof *line_sty);
     PLFLT *line_w = calloc((size_t)n, sizeof *line_w);
     char **text = calloc((size_t)n, sizeof *text);
     char *store = calloc((size_t)n, PLOT_TEXT_MAX);
@@ -522,8 +530,8 @@ static void draw_legend(const sasnav_line_plot *p, const line_range *r)
         PLFLT w, h;
         plschr(0.0, 0.9);
         pllegend(&w, &h, PL_LEGEND_BACKGROUND | PL_LEGEND_BOUNDING_BOX,
-                 legend_corner(p, r, n) | PL_POSITION_INSIDE | PL_POSITION_VIEWPORT,
-                 0.02, 0.03, 0.07, COL_BG, COL_GRID, 1, 0, 0, n, opt, 0.8, 1.0, 2.0, 0.0, text_col,
+                 legend_corner(p, r, n) | PL_POSITION_INSIDE | PL_POSITION_VIEWPORT, 0.02, 0.03,
+                 0.07, COL_BG, COL_GRID, 1, 0, 0, n, opt, 0.8, 1.0, 2.0, 0.0, text_col,
                  (PLCHAR_MATRIX)text, NULL, NULL, NULL, NULL, line_col, line_sty, line_w, NULL,
                  NULL, NULL, NULL);
     }

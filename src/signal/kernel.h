@@ -43,6 +43,22 @@ double sasnav_kernel_eval(const sasnav_kernel *kernel, double z);
 int sasnav_kernel_transform(const sasnav_kernel *kernel, int n_quad, int n_freq, const double *xi,
                             double *ft);
 
+/* Polynomial form of the kernel taps (as FINUFFT evaluates its kernel): a
+ * kernel centred at fine-grid coordinate u covers the samples i0 + j,
+ * j = 0..w-1, i0 = ceil(u - w/2); with d = i0 - (u - w/2) in [0, 1) and
+ * t = 2 d - 1 in [-1, 1), tap j is
+ *     phi(-1 + (2/w) (j + d)) ~= sum_{k=0}^{degree} coef[k * stride + j] t^k.
+ * The polynomials interpolate phi at degree + 1 Chebyshev points (monomial
+ * coefficients in t, for Horner evaluation); lanes w..stride-1 are zero.
+ * `coef` holds (degree + 1) * stride doubles. Returns SASNAV_ERR_ARG on bad
+ * input. */
+#define SASNAV_KERNEL_MAX_DEGREE 24
+int sasnav_kernel_fit_taps(const sasnav_kernel *kernel, int degree, int stride, double *coef);
+
+/* Degree used by the operators for a kernel: interpolation error well below
+ * the tolerance the width was chosen for (test_nufft checks it). */
+int sasnav_kernel_taps_degree(const sasnav_kernel *kernel);
+
 /* Gauss-Legendre nodes and weights on [-1, 1] (n >= 1): Newton iteration on
  * the Legendre polynomial P_n (three-term recurrence). Nodes ascending.
  * Returns SASNAV_ERR_ARG for n < 1 or NULL, SASNAV_ERR_NOT_CONVERGED if a

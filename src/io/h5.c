@@ -1,0 +1,461 @@
+/* HDF5 files of runs, navigation and images (layout: docs/format.md).
+ * The checked low-level access is in h5_util.c; this file maps the
+ * library's structures onto the layout and validates what it reads. */
+#include "sasnav/io.h"
+
+#include "io/h5_util.h"
+#include "sasnav/error.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define UNITS_POSE "m, m, rad"
+
+static const char *const RUN_FORMATS[] = {"sasnav-run"};
+static const char *const IMAGE_FORMATS[] = {"sasnav-image"};
+/* Navigation can be read from a navigation file or from a run. */
+static const char *const NAV_FORMATS[] = {"sasnav-nav", "sasnav-run"};
+
+static int floats_finite(const float *v, size_t n, size_t *bad)
+{
+    for (size_t k = 0; k < n; k++)
+        if (!isfinite(v[k])) {
+            *bad = k;
+            return 0;
+        }
+    return 1;
+}
+
+/* --- navigation: <group>/tx and <group>/array, [n_pings][3] (x, y, theta) */
+
+static int poses_finite(int n, const sasnav_ping_pose *poses)
+{
+    for (int p = 0; p < n; p++) {
+        const sasnav_pose *q[2] = {&poses[p].tx, &poses[p].array};
+        for (int k = 0; k < 2; k++)
+            if (!isfinite(q[k]->x) || !isfinite(q[k]->y) || !isfinite(q[k]->theta)) return 0;
+    }
+    return 1;
+}
+
+static int poses_write(h5_ctx *c, const char *group, int n, const sasnav_ping_pose *poses)
+{
+    char name[32];
+    double *buf = malloc((size_t)n * 3 * sizeof *buf);
+    if (!buf) return h5_fail(c, SASNAV_ERR_NOMEM, "cannot allocate %d poses", n);
+    int rc = h5_create_group(c, group);
+    hsize_t dims[2] = {(hsize_t)n, 3};
+    for (int which = 0; which < 2 && !rc; which++) {
+        for (int p = 0; p < n; p++) {
+            sasnav_pose q = which == 0 ? poses[p].tx : poses[p].array;
+            buf[3 * p] = q.x;
+            buf[3 * p + 1] = q.y;
+            buf[3 * p + 2] = q.theta;
+        }
+        snprintf(name, sizeof name, "%s/%s", group, which == 0 ? "tx" : "array");
+        rc = h5_write_dataset(c, name, H5_REAL, 2, dims, NULL, buf, UNITS_POSE);
+    }
+    free(buf);
+    return rc;
+}
+
+/* Number of pings of a navigation group (rows of <group>/tx). */
+static int poses_count(h5_ctx *c, const char *group, int *n)
+{
+    char name[32];
+    snprintf(name, sizeof name, "%s/tx", group);
+    hsize_t dims[2];
+    hid_t dset;
+    int rc = h5_open_dataset(c, name, H5_REAL, 2, dims, &dset);
+    if (rc) return rc;
+    H5Dclose(dset);
+    if (dims[1] != 3)
+        return h5_fail(c, SASNAV_ERR_FORMAT, "%s has %llu columns, expected 3 (x, y, theta)", name,
+                       (unsigned long long)dims[1]);
+    *n = (int)dims[0];
+    return SASNAV_OK;
+}
+
+static int poses_read(h5_ctx *c, const char *group, int n, sasnav_ping_pose *poses)
+{
+    char name[32];
+    double *buf = malloc((size_t)n * 3 * sizeof *buf);
+    if (!buf) return h5_fail(c, SASNAV_ERR_NOMEM, "cannot allocate %d poses", n);
+    hsize_t dims[2] = {(hsize_t)n, 3};
+    int rc = SASNAV_OK;
+    for (int which = 0; which < 2 && !rc; which++) {
+        snprintf(name, sizeof name, "%s/%s", group, which == 0 ? "tx" : "array");
+        rc = h5_read_dataset_dims(c, name, H5_REAL, 2, dims, buf);
+        for (int p = 0; p < n && !rc; p++) {
+            sasnav_pose q = {buf[3 * p], buf[3 * p + 1], buf[3 * p + 2]};
+            if (!isfinite(q.x) || !isfinite(q.y) || !isfinite(q.theta))
+                rc = h5_fail(c, SASNAV_ERR_FORMAT, "%s: pose of ping %d is not finite", name, p);
+            else if (which == 0)
+                poses[p].tx = q;
+            else
+                poses[p].array = q;
+        }
+    }
+    free(buf);
+    return rc;
+}
+
+/* --- runs ----------------------------------------------------------------- */
+
+static int system_write(h5_ctx *c, const sasnav_run *run)
+{
+    const char *g = "/system";
+    const sasnav_system *s = &run->sys;
+    int rc = h5_create_group(c, g);
+    if (!rc) rc = h5_write_attr_double(c, g, "sound_speed", s->sound_speed);
+    if (!rc) rc = h5_write_attr_double(c, g, "f0", s->f0);
+    if (!rc) rc = h5_write_attr_double(c, g, "bandwidth", s->bandwidth);
+    if (!rc) rc = h5_write_attr_double(c, g, "sample_rate", s->sample_rate);
+    if (!rc) rc = h5_write_attr_int(c, g, "taper", (int)s->taper);
+    if (!rc) rc = h5_write_attr_int(c, g, "attenuation", (int)s->attenuation);
+    if (!rc) rc = h5_write_attr_int(c, g, "beam_pattern", s->beam_pattern);
+    if (!rc) rc = h5_write_attr_double(c, g, "t0", run->win.t0);
+    if (!rc) rc = h5_write_attr_double(c, g, "ping_spacing", run->ping_spacing);
+    if (!rc) rc = h5_write_attr_double(c, g, "speed", run->speed);
+    if (!rc) rc = h5_write_attr_double(c, g, "tx_lag", run->tx_lag);
+    if (!rc) rc = h5_write_attr_double(c, g, "range_of_interest", run->range_of_interest);
+    return rc;
+}
+
+static int array_write(h5_ctx *c, const sasnav_array *a)
+{
+    const char *g = "/array";
+    hsize_t dims[1] = {(hsize_t)a->n_rx};
+    int rc = h5_create_group(c, g);
+    if (!rc) rc = h5_write_dataset(c, "/array/rx_u", H5_REAL, 1, dims, NULL, a->rx_u, "m");
+    if (!rc) rc = h5_write_attr_double(c, g, "rx_length", a->rx_length);
+    if (!rc) rc = h5_write_attr_double(c, g, "tx_length", a->tx_length);
+    if (!rc) rc = h5_write_attr_double(c, g, "rx_height", a->rx_height);
+    if (!rc) rc = h5_write_attr_double(c, g, "tx_height", a->tx_height);
+    return rc;
+}
+
+int sasnav_run_write(const char *path, const sasnav_run *run)
+{
+    if (!path) return sasnav_set_error(SASNAV_ERR_ARG, "run file path is NULL");
+    int rc = sasnav_run_check(run);
+    if (rc) return rc;
+    h5_ctx c;
+    h5_begin(&c, path);
+    rc = h5_create_tmp(&c, "sasnav-run");
+    hsize_t dims[3] = {(hsize_t)run->n_pings, (hsize_t)run->array.n_rx, (hsize_t)run->win.n_samples};
+    hsize_t ping_chunk[3] = {1, dims[1], dims[2]};
+    if (!rc) rc = h5_write_dataset(&c, "/raw", H5_COMPLEX, 3, dims, ping_chunk, run->raw, "1");
+    if (!rc) rc = system_write(&c, run);
+    if (!rc) rc = array_write(&c, &run->array);
+    if (!rc) rc = poses_write(&c, "/nav", run->n_pings, run->nav);
+    if (!rc && run->truth) rc = poses_write(&c, "/truth", run->n_pings, run->truth);
+    if (!rc) rc = h5_commit(&c);
+    h5_end(&c);
+    return rc;
+}
+
+/* An integer attribute that must lie in [lo, hi]. */
+static int attr_int_range(h5_ctx *c, const char *obj, const char *name, int lo, int hi, int *value)
+{
+    int rc = h5_read_attr_int(c, obj, name, value);
+    if (rc) return rc;
+    if (*value < lo || *value > hi)
+        return h5_fail(c, SASNAV_ERR_FORMAT, "attribute '%s' of %s is %d, expected %d..%d", name, obj,
+                       *value, lo, hi);
+    return SASNAV_OK;
+}
+
+/* Reads /system into the run header (everything but sizes and arrays). */
+static int system_read(h5_ctx *c, sasnav_run *h)
+{
+    const char *g = "/system";
+    sasnav_system *s = &h->sys;
+    int taper = 0, atten = 0;
+    int rc = h5_read_attr_double(c, g, "sound_speed", &s->sound_speed);
+    if (!rc) rc = h5_read_attr_double(c, g, "f0", &s->f0);
+    if (!rc) rc = h5_read_attr_double(c, g, "bandwidth", &s->bandwidth);
+    if (!rc) rc = h5_read_attr_double(c, g, "sample_rate", &s->sample_rate);
+    if (!rc) rc = attr_int_range(c, g, "taper", SASNAV_TAPER_NONE, SASNAV_TAPER_HAMMING, &taper);
+    if (!rc) rc = attr_int_range(c, g, "attenuation", SASNAV_ATTEN_EXPLODING, SASNAV_ATTEN_NONE, &atten);
+    if (!rc) rc = attr_int_range(c, g, "beam_pattern", 0, 1, &s->beam_pattern);
+    if (!rc) rc = h5_read_attr_double(c, g, "t0", &h->win.t0);
+    if (!rc) rc = h5_read_attr_double(c, g, "ping_spacing", &h->ping_spacing);
+    if (!rc) rc = h5_read_attr_double(c, g, "speed", &h->speed);
+    if (!rc) rc = h5_read_attr_double(c, g, "tx_lag", &h->tx_lag);
+    if (!rc) rc = h5_read_attr_double(c, g, "range_of_interest", &h->range_of_interest);
+    if (rc) return rc;
+    s->taper = (sasnav_taper)taper;
+    s->attenuation = (sasnav_attenuation)atten;
+    rc = sasnav_system_check(s);
+    if (rc) return h5_reframe(c, rc, g);
+    return SASNAV_OK;
+}
+
+static int array_read(h5_ctx *c, int n_rx, sasnav_array *a)
+{
+    const char *g = "/array";
+    memset(a, 0, sizeof *a);
+    if (n_rx > SASNAV_MAX_RX)
+        return h5_fail(c, SASNAV_ERR_FORMAT, "/raw has %d channels, at most %d are supported", n_rx,
+                       SASNAV_MAX_RX);
+    a->n_rx = n_rx;
+    hsize_t dims[1] = {(hsize_t)n_rx};
+    int rc = h5_read_dataset_dims(c, "/array/rx_u", H5_REAL, 1, dims, a->rx_u);
+    if (!rc) rc = h5_read_attr_double(c, g, "rx_length", &a->rx_length);
+    if (!rc) rc = h5_read_attr_double(c, g, "tx_length", &a->tx_length);
+    if (!rc) rc = h5_read_attr_double(c, g, "rx_height", &a->rx_height);
+    if (!rc) rc = h5_read_attr_double(c, g, "tx_height", &a->tx_height);
+    if (rc) return rc;
+    rc = sasnav_array_check(a);
+    if (rc) return h5_reframe(c, rc, g);
+    return SASNAV_OK;
+}
+
+/* Reads /raw into the allocated run and checks every sample. */
+static int raw_read(h5_ctx *c, hid_t dset, sasnav_run *run)
+{
+    int rc = h5_read_dataset(c, dset, "/raw", H5_COMPLEX, run->raw);
+    if (rc) return rc;
+    size_t per_channel = (size_t)run->win.n_samples, per_ping = per_channel * (size_t)run->array.n_rx;
+    size_t bad;
+    if (!floats_finite((const float *)run->raw, 2 * per_ping * (size_t)run->n_pings, &bad)) {
+        bad /= 2;
+        return h5_fail(c, SASNAV_ERR_FORMAT, "/raw: sample %zu of channel %zu of ping %zu is not finite",
+                       bad % per_channel, (bad % per_ping) / per_channel, bad / per_ping);
+    }
+    return SASNAV_OK;
+}
+
+/* Everything after the file is open; *out is set only on success. */
+static int run_read_open(h5_ctx *c, sasnav_run **out)
+{
+    sasnav_run h;
+    memset(&h, 0, sizeof h);
+    hsize_t dims[3];
+    hid_t raw;
+    int rc = system_read(c, &h);
+    if (rc) return rc;
+    rc = h5_open_dataset(c, "/raw", H5_COMPLEX, 3, dims, &raw);
+    if (rc) return rc;
+    h.n_pings = (int)dims[0];
+    h.win.n_samples = (int)dims[2];
+    rc = array_read(c, (int)dims[1], &h.array);
+    int nav_pings = 0, with_truth = h5_exists(c, "/truth");
+    if (!rc) rc = poses_count(c, "/nav", &nav_pings);
+    if (!rc && nav_pings != h.n_pings)
+        rc = h5_fail(c, SASNAV_ERR_FORMAT, "/nav/tx has %d pings, /raw has %d", nav_pings, h.n_pings);
+
+    sasnav_run *run = NULL;
+    if (!rc) {
+        rc = sasnav_run_alloc(&h.sys, &h.array, &h.win, h.n_pings, with_truth, &run);
+        if (rc) rc = h5_reframe(c, rc, "/raw");
+    }
+    if (!rc) rc = raw_read(c, raw, run);
+    H5Dclose(raw);
+    if (!rc) rc = poses_read(c, "/nav", run->n_pings, run->nav);
+    if (!rc && with_truth) rc = poses_read(c, "/truth", run->n_pings, run->truth);
+    if (!rc) {
+        run->ping_spacing = h.ping_spacing;
+        run->speed = h.speed;
+        run->tx_lag = h.tx_lag;
+        run->range_of_interest = h.range_of_interest;
+        rc = sasnav_run_check(run);
+        if (rc) rc = h5_reframe(c, rc, "run");
+    }
+    if (rc) {
+        sasnav_run_free(run);
+        return rc;
+    }
+    *out = run;
+    return SASNAV_OK;
+}
+
+int sasnav_run_read(const char *path, sasnav_run **run)
+{
+    if (!run) return sasnav_set_error(SASNAV_ERR_ARG, "run output pointer is NULL");
+    *run = NULL;
+    if (!path) return sasnav_set_error(SASNAV_ERR_ARG, "run file path is NULL");
+    h5_ctx c;
+    h5_begin(&c, path);
+    int rc = h5_open_read(&c, RUN_FORMATS, 1, NULL, 0);
+    if (!rc) rc = run_read_open(&c, run);
+    h5_end(&c);
+    return rc;
+}
+
+/* --- navigation files ------------------------------------------------------ */
+
+int sasnav_nav_write(const char *path, int n_pings, const sasnav_ping_pose *nav,
+                     const sasnav_ping_pose *truth)
+{
+    if (!path || !nav || n_pings < 1)
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigation write needs a path and >= 1 pose");
+    if (!poses_finite(n_pings, nav) || (truth && !poses_finite(n_pings, truth)))
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigation to write is not finite");
+    h5_ctx c;
+    h5_begin(&c, path);
+    int rc = h5_create_tmp(&c, "sasnav-nav");
+    if (!rc) rc = poses_write(&c, "/nav", n_pings, nav);
+    if (!rc && truth) rc = poses_write(&c, "/truth", n_pings, truth);
+    if (!rc) rc = h5_commit(&c);
+    h5_end(&c);
+    return rc;
+}
+
+static int nav_read_open(h5_ctx *c, int *n_pings, sasnav_ping_pose **nav, sasnav_ping_pose **truth)
+{
+    int n = 0;
+    int rc = poses_count(c, "/nav", &n);
+    if (rc) return rc;
+    int with_truth = truth && h5_exists(c, "/truth");
+    sasnav_ping_pose *pn = calloc((size_t)n, sizeof *pn);
+    sasnav_ping_pose *pt = with_truth ? calloc((size_t)n, sizeof *pt) : NULL;
+    if (!pn || (with_truth && !pt)) rc = h5_fail(c, SASNAV_ERR_NOMEM, "cannot allocate %d poses", n);
+    if (!rc) rc = poses_read(c, "/nav", n, pn);
+    if (!rc && with_truth) rc = poses_read(c, "/truth", n, pt);
+    if (rc) {
+        free(pn);
+        free(pt);
+        return rc;
+    }
+    *n_pings = n;
+    *nav = pn;
+    if (truth) *truth = pt;
+    return SASNAV_OK;
+}
+
+int sasnav_nav_read(const char *path, int *n_pings, sasnav_ping_pose **nav, sasnav_ping_pose **truth)
+{
+    if (truth) *truth = NULL;
+    if (nav) *nav = NULL;
+    if (n_pings) *n_pings = 0;
+    if (!path || !n_pings || !nav)
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigation read needs a path and output pointers");
+    h5_ctx c;
+    h5_begin(&c, path);
+    int rc = h5_open_read(&c, NAV_FORMATS, 2, NULL, 0);
+    if (!rc) rc = nav_read_open(&c, n_pings, nav, truth);
+    h5_end(&c);
+    return rc;
+}
+
+/* --- images ------------------------------------------------------------------ */
+
+static double *axis_values(double v0, double d, int n)
+{
+    double *v = malloc((size_t)n * sizeof *v);
+    if (v)
+        for (int k = 0; k < n; k++) v[k] = v0 + k * d;
+    return v;
+}
+
+int sasnav_image_write(const char *path, const sasnav_grid *grid, const sasnav_cfloat *image)
+{
+    if (!path || !image) return sasnav_set_error(SASNAV_ERR_ARG, "image write needs a path and an image");
+    int rc = sasnav_grid_check(grid);
+    if (rc) return rc;
+    size_t bad, n = (size_t)grid->nx * (size_t)grid->ny;
+    if (!floats_finite((const float *)image, 2 * n, &bad))
+        return sasnav_set_error(SASNAV_ERR_ARG, "image pixel (%zu, %zu) is not finite",
+                                bad / 2 / (size_t)grid->nx, bad / 2 % (size_t)grid->nx);
+    double *x = axis_values(grid->x0, grid->dx, grid->nx);
+    double *y = axis_values(grid->y0, grid->dy, grid->ny);
+    h5_ctx c;
+    h5_begin(&c, path);
+    if (!x || !y) rc = h5_fail(&c, SASNAV_ERR_NOMEM, "cannot allocate the image axes");
+    hsize_t dims[2] = {(hsize_t)grid->ny, (hsize_t)grid->nx};
+    if (!rc) rc = h5_create_tmp(&c, "sasnav-image");
+    if (!rc) rc = h5_write_dataset(&c, "/image", H5_COMPLEX, 2, dims, NULL, image, "1");
+    if (!rc) rc = h5_write_attr_double(&c, "/image", "x0", grid->x0);
+    if (!rc) rc = h5_write_attr_double(&c, "/image", "dx", grid->dx);
+    if (!rc) rc = h5_write_attr_double(&c, "/image", "y0", grid->y0);
+    if (!rc) rc = h5_write_attr_double(&c, "/image", "dy", grid->dy);
+    if (!rc) rc = h5_write_dataset(&c, "/x", H5_REAL, 1, &dims[1], NULL, x, "m");
+    if (!rc) rc = h5_write_dataset(&c, "/y", H5_REAL, 1, &dims[0], NULL, y, "m");
+    if (!rc) rc = h5_commit(&c);
+    h5_end(&c);
+    free(x);
+    free(y);
+    return rc;
+}
+
+/* One image axis: origin and spacing from the attributes of /image when
+ * present (exact round trip), else from the coordinates; the coordinates must
+ * be uniform either way. *d = 0 for a single pixel without a spacing. */
+static int axis_read(h5_ctx *c, const char *name, const char *a0, const char *ad, int n, double *v0,
+                     double *d)
+{
+    double *v = malloc((size_t)n * sizeof *v);
+    if (!v) return h5_fail(c, SASNAV_ERR_NOMEM, "cannot allocate %s", name);
+    hsize_t dims[1] = {(hsize_t)n};
+    int rc = h5_read_dataset_dims(c, name, H5_REAL, 1, dims, v);
+    for (int k = 0; k < n && !rc; k++)
+        if (!isfinite(v[k])) rc = h5_fail(c, SASNAV_ERR_FORMAT, "%s[%d] is not finite", name, k);
+    if (!rc && h5_attr_exists(c, "/image", a0)) {
+        rc = h5_read_attr_double(c, "/image", a0, v0);
+        if (!rc) rc = h5_read_attr_double(c, "/image", ad, d);
+    } else if (!rc) {
+        *v0 = v[0];
+        *d = n > 1 ? (v[n - 1] - v[0]) / (n - 1) : 0.0;
+    }
+    if (!rc && n > 1 && !(*d > 0))
+        rc = h5_fail(c, SASNAV_ERR_FORMAT, "%s is not increasing", name);
+    /* Tolerance: rounding of v0 + k d, relative to the spacing and values. */
+    for (int k = 0; k < n && !rc; k++)
+        if (fabs(v[k] - (*v0 + k * *d)) > 1e-6 * *d + 1e-12 * fabs(v[k]))
+            rc = h5_fail(c, SASNAV_ERR_FORMAT, "%s is not uniformly spaced (or disagrees with /image %s, %s)",
+                         name, a0, ad);
+    free(v);
+    return rc;
+}
+
+static int image_read_open(h5_ctx *c, sasnav_grid *grid, sasnav_cfloat **image)
+{
+    hsize_t dims[2];
+    hid_t dset;
+    int rc = h5_open_dataset(c, "/image", H5_COMPLEX, 2, dims, &dset);
+    if (rc) return rc;
+    sasnav_grid g = {0, 0, 0, 0, (int)dims[1], (int)dims[0]};
+    rc = axis_read(c, "/x", "x0", "dx", g.nx, &g.x0, &g.dx);
+    if (!rc) rc = axis_read(c, "/y", "y0", "dy", g.ny, &g.y0, &g.dy);
+    if (!rc) {
+        /* Single-pixel axes without spacing: as sasnav_grid_make. */
+        if (g.dx == 0.0) g.dx = g.dy > 0.0 ? g.dy : 1.0;
+        if (g.dy == 0.0) g.dy = g.dx;
+        rc = sasnav_grid_check(&g);
+        if (rc) rc = h5_reframe(c, rc, "/image");
+    }
+    sasnav_cfloat *img = NULL;
+    size_t n = (size_t)g.nx * (size_t)g.ny, bad;
+    if (!rc) {
+        img = malloc(n * sizeof *img);
+        if (!img) rc = h5_fail(c, SASNAV_ERR_NOMEM, "cannot allocate a %d x %d image", g.ny, g.nx);
+    }
+    if (!rc) rc = h5_read_dataset(c, dset, "/image", H5_COMPLEX, img);
+    if (!rc && !floats_finite((const float *)img, 2 * n, &bad))
+        rc = h5_fail(c, SASNAV_ERR_FORMAT, "/image: pixel (%zu, %zu) is not finite", bad / 2 / (size_t)g.nx,
+                     bad / 2 % (size_t)g.nx);
+    H5Dclose(dset);
+    if (rc) {
+        free(img);
+        return rc;
+    }
+    *grid = g;
+    *image = img;
+    return SASNAV_OK;
+}
+
+int sasnav_image_read(const char *path, sasnav_grid *grid, sasnav_cfloat **image)
+{
+    if (image) *image = NULL;
+    if (!path || !grid || !image)
+        return sasnav_set_error(SASNAV_ERR_ARG, "image read needs a path, a grid and an image pointer");
+    h5_ctx c;
+    h5_begin(&c, path);
+    int rc = h5_open_read(&c, IMAGE_FORMATS, 1, NULL, 0);
+    if (!rc) rc = image_read_open(&c, grid, image);
+    h5_end(&c);
+    return rc;
+}

@@ -1,0 +1,835 @@
+/* The ping operator T and its adjoint T^H (paper eq. acop, SPEC 2; op.h).
+ *
+ * Per channel l, (T rho)_l(t_m) = sum_n p(t_m - tau_ln) G_ln rho_n is computed
+ * as a NUFFT (Barnett et al. 2019; cf. Fessler & Sutton 2003, cited by the
+ * paper):
+ *
+ *   1. spread: fine[j] = sum_n G_ln rho_n phi((j h - s_ln) / (w h / 2)),
+ *      s_ln = tau_ln - (t0 - pad dt), on a periodic fine grid of Lf samples,
+ *      spacing h = Mp dt / Lf (the period Mp dt of the coarse grid);
+ *   2. F = FFT_Lf(fine) = (1/h) phihat(f_k) sum_n c_n exp(-j 2 pi f_k s_n)
+ *      (Poisson summation, up to the kernel's aliasing error);
+ *   3. X_k = F[k mod Lf] w(f_k) / (W phihat_eff(f_k)), phihat_eff = phihat / h,
+ *      for the band |k| <= K (sasnav_band_kmax), 0 elsewhere;
+ *   4. x = IFFT_Mp(X) (unnormalised): x[m] = sum_n c_n p(m dt - s_n), the
+ *      periodic band-limited pulse of sasnav_pulse_direct; output samples
+ *      m = pad .. pad + n_samples - 1.
+ *
+ * T^H applies the transposed steps in reverse order (zero-padded data ->
+ * FFT_Mp -> same real weights -> embed in fine spectrum -> IFFT_Lf ->
+ * interpolate with the same kernel taps -> conj(G)), so it is the exact
+ * adjoint up to float rounding.
+ *
+ * Storage (filled by set_geometry): for every (channel, point) pair the first
+ * fine-grid index (int32), `wpad` kernel taps (float, zero beyond the kernel
+ * width; evaluated from polynomial fits of the kernel, kernel.h, instead of
+ * w exp/sqrt calls) and G (complex float). Pairs are stored in blocks of BLOCK points:
+ * pair (l, n) at ((n / BLOCK) * n_rx + l) * BLOCK + n % BLOCK, so that a
+ * channel's points are contiguous within a block (forward: loop over blocks
+ * per channel) and a block's channels are close together (adjoint: loop over
+ * channels per point).
+ *
+ * Threads: FFTW plans are made in create only (inside a named critical
+ * section, since the FFTW planner is not re-entrant) and run with the
+ * new-array execute functions on per-thread buffers of the same alignment.
+ */
+#include "sasnav/op.h"
+#include "sasnav/error.h"
+#include "signal/kernel.h"
+
+#include <fftw3.h>
+#include <math.h>
+#include <omp.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define BLOCK 64               /* points per block of the pair layout */
+#define MAX_SAMPLES (1 << 26)  /* window samples (keeps every index in int) */
+#define MIN_SENSOR_DISTANCE 1e-9
+
+/* FFT buffers are handled as interleaved (re, im) floats: fftwf_complex is
+ * float _Complex here because <complex.h> is included before <fftw3.h>. */
+typedef struct {
+    float *fine;           /* 2 lf: FFT buffer of the fine grid */
+    float *coarse;         /* 2 mp: FFT buffer of the coarse grid */
+    float *re, *im;        /* lf + ext: split fine grid for spreading */
+} op_work;
+
+typedef void (*spread_fn)(const sasnav_op *op, int l, const sasnav_cfloat *rho, float *re,
+                          float *im);
+typedef void (*interp_fn)(const sasnav_op *op, int block, sasnav_cfloat *rho, int accumulate);
+typedef void (*taps_fn)(const sasnav_op *op, int count, const float *t, const float *keep,
+                        float *taps);
+
+struct sasnav_op {
+    sasnav_system sys;
+    sasnav_array array;
+    sasnav_window win;
+    int n_points, n_rx, n_samples, nthreads;
+    double *x, *y;          /* the points, as given */
+    double *tx_range;       /* per point: |z_n - z_t| (scratch of set_geometry) */
+    double *tx_gain;        /* per point: Tx beam pattern */
+
+    /* Grids. */
+    int pad, mp, lf, ext;   /* coarse offset, coarse and fine lengths, fine extension */
+    double dt, h, period, grid_start; /* grid_start = t0 - pad dt */
+    sasnav_kernel kernel;
+    int wpad;               /* taps stored per pair: width rounded up to 4 */
+    int kmax;
+    float *spectral;        /* 2 kmax + 1 real weights w(f_k) / (W phihat_eff(f_k)) */
+
+    /* Per-pair geometry. */
+    int n_blocks;
+    size_t n_pairs;
+    int32_t *index;         /* first fine index of the kernel, in [0, lf - w] */
+    float *taps;            /* wpad kernel weights per pair */
+    float *green;           /* G as (re, im) */
+    long n_dropped;
+    int have_geometry;
+
+    /* FFT plans and work buffers. */
+    fftwf_plan fine_fwd, fine_bwd, coarse_fwd, coarse_bwd;
+    op_work *work;          /* one per thread */
+    float *adj_re, *adj_im; /* n_rx fine grids (lf + ext each) for the adjoint */
+    spread_fn spread;
+    interp_fn interp;
+    taps_fn taps_eval;
+    int tap_degree;
+    float *tap_coef;        /* (tap_degree + 1) x wpad polynomial coefficients */
+};
+
+/* ------------------------------------------------------------------------ */
+/* Hot loops, generated for a compile-time tap count W (4, 8, 12, 16) so that
+ * the compiler unrolls and vectorises the tap loop. */
+
+/* fine[index + j] += taps[j] * G rho over one channel's points. Consecutive
+ * points with the same first index (long runs along x on grids, where the
+ * delay changes slowly) are summed in registers and added to the grid once:
+ * adding every point straight into memory makes each update wait for the
+ * previous, overlapping store (store-to-load forwarding). */
+#define DEFINE_SPREAD(W)                                                                   \
+    static void spread_##W(const sasnav_op *op, int l, const sasnav_cfloat *rho,           \
+                           float *restrict re, float *restrict im)                         \
+    {                                                                                      \
+        const float *rho_f = (const float *)rho;                                           \
+        float acc_r[W], acc_i[W];                                                          \
+        for (int j = 0; j < W; j++) acc_r[j] = acc_i[j] = 0.0f;                            \
+        int32_t run = op->index[(size_t)l * BLOCK];                                        \
+        for (int b = 0; b < op->n_blocks; b++) {                                           \
+            int n0 = b * BLOCK;                                                            \
+            int count = op->n_points - n0 < BLOCK ? op->n_points - n0 : BLOCK;             \
+            size_t q0 = ((size_t)b * (size_t)op->n_rx + (size_t)l) * BLOCK;                \
+            const int32_t *restrict index = op->index + q0;                                \
+            const float *restrict green = op->green + 2 * q0;                              \
+            const float *restrict taps = op->taps + q0 * W;                                \
+            for (int i = 0; i < count; i++) {                                              \
+                if (index[i] != run) {                                                     \
+                    _Pragma("omp simd") for (int j = 0; j < W; j++)                        \
+                    {                                                                      \
+                        re[run + j] += acc_r[j];                                           \
+                        im[run + j] += acc_i[j];                                           \
+                        acc_r[j] = acc_i[j] = 0.0f;                                        \
+                    }                                                                      \
+                    run = index[i];                                                        \
+                }                                                                          \
+                float gr = green[2 * i], gi = green[2 * i + 1];                            \
+                float rr = rho_f[2 * (n0 + i)], ri = rho_f[2 * (n0 + i) + 1];              \
+                float cr = gr * rr - gi * ri, ci = gr * ri + gi * rr;                      \
+                const float *restrict t = taps + (size_t)i * W;                            \
+                _Pragma("omp simd") for (int j = 0; j < W; j++)                            \
+                {                                                                          \
+                    acc_r[j] += t[j] * cr;                                                 \
+                    acc_i[j] += t[j] * ci;                                                 \
+                }                                                                          \
+            }                                                                              \
+        }                                                                                  \
+        for (int j = 0; j < W; j++) {                                                      \
+            re[run + j] += acc_r[j];                                                       \
+            im[run + j] += acc_i[j];                                                       \
+        }                                                                                  \
+    }
+
+/* rho[n] (+)= sum_l conj(G_ln) sum_j taps[j] fine_l[index + j] for the points
+ * of one block. The per-tap partial sums are kept in W lanes over all
+ * channels and reduced once per point. */
+#define DEFINE_INTERP(W)                                                                   \
+    static void interp_##W(const sasnav_op *op, int b, sasnav_cfloat *rho, int accumulate) \
+    {                                                                                      \
+        int n0 = b * BLOCK;                                                                \
+        int count = op->n_points - n0 < BLOCK ? op->n_points - n0 : BLOCK;                 \
+        size_t stride = (size_t)op->lf + (size_t)op->ext;                                  \
+        float *rho_f = (float *)rho;                                                       \
+        for (int i = 0; i < count; i++) {                                                  \
+            float acc_r[W], acc_i[W];                                                      \
+            for (int j = 0; j < W; j++) acc_r[j] = acc_i[j] = 0.0f;                        \
+            for (int l = 0; l < op->n_rx; l++) {                                           \
+                size_t q = ((size_t)b * (size_t)op->n_rx + (size_t)l) * BLOCK + (size_t)i; \
+                const float *restrict t = op->taps + q * W;                                \
+                const float *restrict fr = op->adj_re + (size_t)l * stride + op->index[q]; \
+                const float *restrict fi = op->adj_im + (size_t)l * stride + op->index[q]; \
+                float gr = op->green[2 * q], gi = op->green[2 * q + 1];                    \
+                _Pragma("omp simd") for (int j = 0; j < W; j++)                            \
+                {                                                                          \
+                    float a = t[j] * gr, c = t[j] * gi;                                    \
+                    acc_r[j] += a * fr[j] + c * fi[j];                                     \
+                    acc_i[j] += a * fi[j] - c * fr[j];                                     \
+                }                                                                          \
+            }                                                                              \
+            float sr = 0.0f, si = 0.0f;                                                    \
+            for (int j = 0; j < W; j++) {                                                  \
+                sr += acc_r[j];                                                            \
+                si += acc_i[j];                                                            \
+            }                                                                              \
+            if (accumulate) {                                                              \
+                rho_f[2 * (n0 + i)] += sr;                                                 \
+                rho_f[2 * (n0 + i) + 1] += si;                                             \
+            } else {                                                                       \
+                rho_f[2 * (n0 + i)] = sr;                                                  \
+                rho_f[2 * (n0 + i) + 1] = si;                                              \
+            }                                                                              \
+        }                                                                                  \
+    }
+
+/* Kernel taps from the fractional offsets t (Horner on the fitted
+ * polynomials, kernel.h), zeroed for dropped pairs (keep = 0). */
+#define DEFINE_TAPS(W)                                                                     \
+    static void taps_##W(const sasnav_op *op, int count, const float *t, const float *keep, \
+                         float *restrict taps)                                             \
+    {                                                                                      \
+        const float *restrict coef = op->tap_coef;                                         \
+        int p = op->tap_degree;                                                            \
+        for (int i = 0; i < count; i++) {                                                  \
+            float acc[W];                                                                  \
+            for (int j = 0; j < W; j++) acc[j] = coef[p * W + j];                          \
+            for (int k = p - 1; k >= 0; k--) {                                             \
+                _Pragma("omp simd") for (int j = 0; j < W; j++) acc[j] =                   \
+                    acc[j] * t[i] + coef[k * W + j];                                       \
+            }                                                                              \
+            for (int j = 0; j < W; j++) taps[(size_t)i * W + j] = acc[j] * keep[i];        \
+        }                                                                                  \
+    }
+DEFINE_TAPS(4)
+DEFINE_TAPS(8)
+DEFINE_TAPS(12)
+DEFINE_TAPS(16)
+
+DEFINE_SPREAD(4)
+DEFINE_SPREAD(8)
+DEFINE_SPREAD(12)
+DEFINE_SPREAD(16)
+DEFINE_INTERP(4)
+DEFINE_INTERP(8)
+DEFINE_INTERP(12)
+DEFINE_INTERP(16)
+
+/* ------------------------------------------------------------------------ */
+/* Options and sizes. */
+
+void sasnav_op_default_opts(sasnav_op_opts *opts)
+{
+    if (!opts) return;
+    opts->tolerance = 1e-6;
+    opts->oversampling = 2.0;
+    opts->pad_samples = -1;
+    opts->nthreads = 0;
+}
+
+static int check_opts(const sasnav_op_opts *o)
+{
+    if (!isfinite(o->tolerance) || !(o->tolerance >= 1e-12) || !(o->tolerance < 1.0))
+        return sasnav_set_error(SASNAV_ERR_ARG, "op: tolerance must be in [1e-12, 1), got %g",
+                                o->tolerance);
+    if (!isfinite(o->oversampling) || !(o->oversampling >= 1.25) || !(o->oversampling <= 8.0))
+        return sasnav_set_error(SASNAV_ERR_ARG, "op: oversampling must be in [1.25, 8], got %g",
+                                o->oversampling);
+    if (o->pad_samples < -1 || o->pad_samples > MAX_SAMPLES)
+        return sasnav_set_error(SASNAV_ERR_ARG, "op: pad_samples must be -1 (auto) or 0..%d, got %d",
+                                MAX_SAMPLES, o->pad_samples);
+    if (o->nthreads < 0 || o->nthreads > 4096)
+        return sasnav_set_error(SASNAV_ERR_ARG, "op: nthreads must be 0 (default) or 1..4096, got %d",
+                                o->nthreads);
+    return SASNAV_OK;
+}
+
+/* Smallest even n' >= n whose only prime factors are 2, 3, 5, 7 (fast FFTW
+ * sizes). */
+static int fast_even_size(long n)
+{
+    if (n < 2) n = 2;
+    if (n % 2) n++;
+    for (;; n += 2) {
+        long m = n;
+        static const int primes[4] = {2, 3, 5, 7};
+        for (int i = 0; i < 4; i++)
+            while (m % primes[i] == 0) m /= primes[i];
+        if (m == 1) return (int)n;
+    }
+}
+
+static int check_points(int n_points, const double *x, const double *y)
+{
+    if (n_points < 1) return sasnav_set_error(SASNAV_ERR_ARG, "op: need >= 1 point, got %d", n_points);
+    if (!x || !y) return sasnav_set_error(SASNAV_ERR_ARG, "op: point coordinates are NULL");
+    for (int n = 0; n < n_points; n++)
+        if (!isfinite(x[n]) || !isfinite(y[n]))
+            return sasnav_set_error(SASNAV_ERR_ARG, "op: point %d has non-finite coordinates", n);
+    return SASNAV_OK;
+}
+
+/* Grid sizes: coarse Mp >= n_samples + 2 pad, fine Lf >= sigma Mp. */
+static int setup_grids(sasnav_op *op, const sasnav_op_opts *o)
+{
+    int n = op->n_samples;
+    op->pad = o->pad_samples >= 0 ? o->pad_samples : (int)ceil(0.1 * n) + 16;
+    long need = (long)n + 2L * op->pad;
+    if (need > MAX_SAMPLES)
+        return sasnav_set_error(SASNAV_ERR_ARG, "op: window plus padding (%ld samples) too long", need);
+    op->mp = fast_even_size(need);
+    op->lf = fast_even_size((long)ceil(o->oversampling * op->mp - 1e-9));
+    op->dt = 1.0 / op->sys.sample_rate;
+    op->period = op->mp / op->sys.sample_rate;
+    op->h = op->period / op->lf;
+    op->grid_start = op->win.t0 - op->pad * op->dt;
+    int rc = sasnav_kernel_choose(o->tolerance, o->oversampling, &op->kernel);
+    if (rc) return rc;
+    op->wpad = (op->kernel.width + 3) / 4 * 4;
+    op->ext = op->wpad;
+    if (op->lf <= 2 * op->kernel.width)
+        return sasnav_set_error(SASNAV_ERR_ARG, "op: window too short for the kernel");
+    return SASNAV_OK;
+}
+
+/* Spectral weights r_k = w(f_k) / (W phihat_eff(f_k)), |k| <= K, where
+ * phihat_eff(f) = (1/h) int phi(t / (w h / 2)) exp(-j 2 pi f t) dt
+ *              = (w / 2) F(pi f w h),  F = sasnav_kernel_transform. */
+static int setup_spectrum(sasnav_op *op)
+{
+    op->kmax = sasnav_band_kmax(&op->sys, op->period);
+    if (op->kmax < 0) return sasnav_set_error(SASNAV_ERR_INTERNAL, "op: bad pulse band");
+    int nk = op->kmax + 1;
+    double *xi = malloc(2 * (size_t)nk * sizeof *xi);
+    op->spectral = malloc((2 * (size_t)op->kmax + 1) * sizeof *op->spectral);
+    if (!xi || !op->spectral) {
+        free(xi);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "op: out of memory (spectrum)");
+    }
+    double *ft = xi + nk;
+    double w = op->kernel.width;
+    for (int k = 0; k < nk; k++) xi[k] = M_PI * (k / op->period) * w * op->h;
+    int rc = sasnav_kernel_transform(&op->kernel, 0, nk, xi, ft);
+    double norm = 0.0;
+    for (int k = -op->kmax; k <= op->kmax && !rc; k++) norm += sasnav_pulse_weight(&op->sys, k / op->period);
+    if (!rc && !(norm > 0.0))
+        rc = sasnav_set_error(SASNAV_ERR_ARG, "op: the pulse band holds no frequency of the grid");
+    for (int k = -op->kmax; k <= op->kmax && !rc; k++) {
+        double phihat = 0.5 * w * ft[abs(k)];
+        if (!(phihat > 1e-30)) {
+            rc = sasnav_set_error(SASNAV_ERR_INTERNAL, "op: kernel transform vanishes in band");
+            break;
+        }
+        op->spectral[k + op->kmax] = (float)(sasnav_pulse_weight(&op->sys, k / op->period) / (norm * phihat));
+    }
+    free(xi);
+    return rc;
+}
+
+/* Polynomial coefficients of the kernel taps (kernel.h), float, lane-padded. */
+static int setup_taps(sasnav_op *op)
+{
+    op->tap_degree = sasnav_kernel_taps_degree(&op->kernel);
+    size_t n = (size_t)(op->tap_degree + 1) * (size_t)op->wpad;
+    double *coef = malloc(n * sizeof *coef);
+    op->tap_coef = malloc(n * sizeof *op->tap_coef);
+    if (!coef || !op->tap_coef) {
+        free(coef);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "op: out of memory (taps)");
+    }
+    int rc = sasnav_kernel_fit_taps(&op->kernel, op->tap_degree, op->wpad, coef);
+    for (size_t i = 0; i < n; i++) op->tap_coef[i] = (float)coef[i];
+    free(coef);
+    return rc;
+}
+
+static int setup_storage(sasnav_op *op)
+{
+    size_t np = (size_t)op->n_points;
+    op->n_blocks = (int)((np + BLOCK - 1) / BLOCK);
+    op->n_pairs = (size_t)op->n_blocks * BLOCK * (size_t)op->n_rx;
+    op->x = malloc(np * sizeof *op->x);
+    op->y = malloc(np * sizeof *op->y);
+    op->tx_range = malloc(np * sizeof *op->tx_range);
+    op->tx_gain = malloc(np * sizeof *op->tx_gain);
+    op->index = calloc(op->n_pairs, sizeof *op->index);
+    op->taps = calloc(op->n_pairs * (size_t)op->wpad, sizeof *op->taps);
+    op->green = calloc(2 * op->n_pairs, sizeof *op->green);
+    size_t fine = (size_t)op->lf + (size_t)op->ext;
+    op->adj_re = fftwf_malloc((size_t)op->n_rx * fine * sizeof(float));
+    op->adj_im = fftwf_malloc((size_t)op->n_rx * fine * sizeof(float));
+    op->work = calloc((size_t)op->nthreads, sizeof *op->work);
+    if (!op->x || !op->y || !op->tx_range || !op->tx_gain || !op->index || !op->taps ||
+        !op->green || !op->adj_re || !op->adj_im || !op->work)
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "op: out of memory (%zu pairs)", op->n_pairs);
+    for (int t = 0; t < op->nthreads; t++) {
+        op_work *w = &op->work[t];
+        w->fine = fftwf_malloc(2 * (size_t)op->lf * sizeof(float));
+        w->coarse = fftwf_malloc(2 * (size_t)op->mp * sizeof(float));
+        w->re = fftwf_malloc(fine * sizeof(float));
+        w->im = fftwf_malloc(fine * sizeof(float));
+        if (!w->fine || !w->coarse || !w->re || !w->im)
+            return sasnav_set_error(SASNAV_ERR_NOMEM, "op: out of memory (work buffers)");
+    }
+    return SASNAV_OK;
+}
+
+/* All plans in place on thread 0's buffers; other buffers come from
+ * fftwf_malloc too, so they have the alignment the plans assume. */
+static int setup_plans(sasnav_op *op)
+{
+    fftwf_complex *fine = (fftwf_complex *)op->work[0].fine;
+    fftwf_complex *coarse = (fftwf_complex *)op->work[0].coarse;
+    int ok;
+#pragma omp critical(sasnav_fftw_planner)
+    {
+        op->fine_fwd = fftwf_plan_dft_1d(op->lf, fine, fine, FFTW_FORWARD, FFTW_ESTIMATE);
+        op->fine_bwd = fftwf_plan_dft_1d(op->lf, fine, fine, FFTW_BACKWARD, FFTW_ESTIMATE);
+        op->coarse_fwd = fftwf_plan_dft_1d(op->mp, coarse, coarse, FFTW_FORWARD, FFTW_ESTIMATE);
+        op->coarse_bwd = fftwf_plan_dft_1d(op->mp, coarse, coarse, FFTW_BACKWARD, FFTW_ESTIMATE);
+        ok = op->fine_fwd && op->fine_bwd && op->coarse_fwd && op->coarse_bwd;
+    }
+    if (!ok) return sasnav_set_error(SASNAV_ERR_FFT, "op: FFTW could not plan sizes %d/%d", op->mp, op->lf);
+    return SASNAV_OK;
+}
+
+static void select_kernels(sasnav_op *op)
+{
+    switch (op->wpad) {
+    case 4: op->spread = spread_4; op->interp = interp_4; op->taps_eval = taps_4; break;
+    case 8: op->spread = spread_8; op->interp = interp_8; op->taps_eval = taps_8; break;
+    case 12: op->spread = spread_12; op->interp = interp_12; op->taps_eval = taps_12; break;
+    default: op->spread = spread_16; op->interp = interp_16; op->taps_eval = taps_16; break;
+    }
+}
+
+int sasnav_op_create(const sasnav_system *sys, const sasnav_array *array, const sasnav_window *win,
+                     int n_points, const double *x, const double *y, const sasnav_op_opts *opts,
+                     sasnav_op **out)
+{
+    if (!out) return sasnav_set_error(SASNAV_ERR_ARG, "op: output pointer is NULL");
+    *out = NULL;
+    int rc = sasnav_system_check(sys);
+    if (!rc) rc = sasnav_array_check(array);
+    if (rc) return rc;
+    if (!win) return sasnav_set_error(SASNAV_ERR_ARG, "op: window is NULL");
+    if (!isfinite(win->t0) || win->n_samples < 1 || win->n_samples > MAX_SAMPLES)
+        return sasnav_set_error(SASNAV_ERR_ARG, "op: bad window (t0 %g s, %d samples)", win->t0,
+                                win->n_samples);
+    rc = check_points(n_points, x, y);
+    if (rc) return rc;
+    sasnav_op_opts o;
+    if (opts)
+        o = *opts;
+    else
+        sasnav_op_default_opts(&o);
+    rc = check_opts(&o);
+    if (rc) return rc;
+
+    sasnav_op *op = calloc(1, sizeof *op);
+    if (!op) return sasnav_set_error(SASNAV_ERR_NOMEM, "op: out of memory");
+    op->sys = *sys;
+    op->array = *array;
+    op->win = *win;
+    op->n_points = n_points;
+    op->n_rx = array->n_rx;
+    op->n_samples = win->n_samples;
+    op->nthreads = o.nthreads > 0 ? o.nthreads : omp_get_max_threads();
+    if (op->nthreads < 1) op->nthreads = 1;
+    rc = setup_grids(op, &o);
+    if (!rc) rc = setup_storage(op);
+    if (!rc) rc = setup_spectrum(op);
+    if (!rc) rc = setup_taps(op);
+    if (!rc) rc = setup_plans(op);
+    if (rc) {
+        sasnav_op_destroy(op);
+        return rc;
+    }
+    memcpy(op->x, x, (size_t)n_points * sizeof *x);
+    memcpy(op->y, y, (size_t)n_points * sizeof *y);
+    select_kernels(op);
+    *out = op;
+    return SASNAV_OK;
+}
+
+void sasnav_op_destroy(sasnav_op *op)
+{
+    if (!op) return;
+#pragma omp critical(sasnav_fftw_planner)
+    {
+        if (op->fine_fwd) fftwf_destroy_plan(op->fine_fwd);
+        if (op->fine_bwd) fftwf_destroy_plan(op->fine_bwd);
+        if (op->coarse_fwd) fftwf_destroy_plan(op->coarse_fwd);
+        if (op->coarse_bwd) fftwf_destroy_plan(op->coarse_bwd);
+    }
+    if (op->work) {
+        for (int t = 0; t < op->nthreads; t++) {
+            fftwf_free(op->work[t].fine);
+            fftwf_free(op->work[t].coarse);
+            fftwf_free(op->work[t].re);
+            fftwf_free(op->work[t].im);
+        }
+        free(op->work);
+    }
+    fftwf_free(op->adj_re);
+    fftwf_free(op->adj_im);
+    free(op->x);
+    free(op->y);
+    free(op->tx_range);
+    free(op->tx_gain);
+    free(op->index);
+    free(op->taps);
+    free(op->green);
+    free(op->spectral);
+    free(op->tap_coef);
+    free(op);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Geometry (set_geometry). Written as plain arithmetic (no libm calls in the
+ * per-pair loops) so that the compiler vectorises them. */
+
+/* Nearest integer of |v| < 2^51 by the "magic number" trick (exact under
+ * IEEE round-to-nearest; vectorises, unlike rint/floor in baseline x86-64, and
+ * has no undefined float-to-int conversion for huge or non-finite v). */
+#ifdef __FAST_MATH__
+#error "op.c needs IEEE semantics (round_nearest); do not build it with -ffast-math"
+#endif
+static inline double round_nearest(double v)
+{
+    const double magic = 6755399441055744.0; /* 1.5 * 2^52 */
+    return (v + magic) - magic;
+}
+
+/* sin(pi v) and cos(pi v): v = k + r with k the nearest integer, |r| <= 1/2;
+ * Taylor polynomials of sin(pi r) (to degree 17) and cos(pi r) (to degree
+ * 18), truncation below 5e-14 at |r| = 1/2; the sign (-1)^k. */
+static inline void sincospi(double v, double *s, double *c)
+{
+    double k = round_nearest(v);
+    double x = M_PI * (v - k), x2 = x * x;
+    /* sin(x) = x (1 - x^2/3! + x^4/5! - ... + x^16/17!) */
+    double sn = 1.0 / 355687428096000.0;   /* 1/17! */
+    sn = sn * x2 - 1.0 / 1307674368000.0;  /* 1/15! */
+    sn = sn * x2 + 1.0 / 6227020800.0;     /* 1/13! */
+    sn = sn * x2 - 1.0 / 39916800.0;       /* 1/11! */
+    sn = sn * x2 + 1.0 / 362880.0;         /* 1/9! */
+    sn = sn * x2 - 1.0 / 5040.0;
+    sn = sn * x2 + 1.0 / 120.0;
+    sn = sn * x2 - 1.0 / 6.0;
+    sn = (sn * x2 + 1.0) * x;
+    /* cos(x) = 1 - x^2/2! + x^4/4! - ... + x^18/18! */
+    double cs = -1.0 / 6402373705728000.0; /* 1/18! */
+    cs = cs * x2 + 1.0 / 20922789888000.0; /* 1/16! */
+    cs = cs * x2 - 1.0 / 87178291200.0;    /* 1/14! */
+    cs = cs * x2 + 1.0 / 479001600.0;      /* 1/12! */
+    cs = cs * x2 - 1.0 / 3628800.0;        /* 1/10! */
+    cs = cs * x2 + 1.0 / 40320.0;
+    cs = cs * x2 - 1.0 / 720.0;
+    cs = cs * x2 + 1.0 / 24.0;
+    cs = cs * x2 - 0.5;
+    cs = cs * x2 + 1.0;
+    double odd = k - 2.0 * round_nearest(0.5 * k); /* -1, 0 or 1 */
+    double sign = odd != 0.0 ? -1.0 : 1.0;
+    *s = sign * sn;
+    *c = sign * cs;
+}
+
+/* Line-aperture pattern sinc(a) = sin(pi a) / (pi a), a = D sin(phi) / lambda,
+ * sin(phi) = (unit vector element -> point) . (element axis). */
+static inline double sinc_pi(double a)
+{
+    double s, c;
+    sincospi(a, &s, &c);
+    double pa = M_PI * a;
+    int small = fabs(pa) < 1e-8; /* both sides are evaluated in SIMD code */
+    return small ? 1.0 : s / (small ? 1.0 : pa);
+}
+
+/* Spreading loss (SPEC 2); selects rather than a switch so that it vectorises. */
+static inline double attenuation(sasnav_attenuation model, double r_t, double r_r)
+{
+    double exploding = 1.0 / sqrt(r_t + r_r), spherical = 1.0 / (r_t * r_r);
+    return model == SASNAV_ATTEN_SPHERICAL ? spherical
+           : model == SASNAV_ATTEN_NONE    ? 1.0
+                                           : exploding;
+}
+
+static int check_pose(sasnav_pose p)
+{
+    return isfinite(p.x) && isfinite(p.y) && isfinite(p.theta);
+}
+
+/* What set_geometry needs of one ping. */
+typedef struct {
+    double tx_x, tx_y, tx_cos, tx_sin, tx_aperture; /* aperture = D_t / lambda (0: omni) */
+    double ar_x, ar_y, ar_cos, ar_sin, rx_aperture;
+} ping_geometry;
+
+/* Tx range and pattern of points [n0, n1). Returns how many are closer than
+ * MIN_SENSOR_DISTANCE to the Tx. */
+static int setup_tx(sasnav_op *op, const ping_geometry *g, int n0, int n1)
+{
+    const double *restrict x = op->x, *restrict y = op->y;
+    double *restrict range = op->tx_range, *restrict gain = op->tx_gain;
+    double hz2 = op->array.tx_height * op->array.tx_height;
+    int bad = 0;
+#pragma omp simd reduction(+ : bad)
+    for (int n = n0; n < n1; n++) {
+        double dx = x[n] - g->tx_x, dy = y[n] - g->tx_y;
+        double r = sqrt(dx * dx + dy * dy + hz2);
+        bad += !(r >= MIN_SENSOR_DISTANCE);
+        double r_safe = r > 0.0 ? r : 1.0;
+        range[n] = r;
+        gain[n] = g->tx_aperture > 0.0
+                      ? sinc_pi(g->tx_aperture * (dx * g->tx_cos + dy * g->tx_sin) / r_safe)
+                      : 1.0;
+    }
+    return bad;
+}
+
+/* Pairs of channel l and block b: delay (double), first fine index, kernel
+ * offset, G. Returns the number of dropped pairs; *bad counts points closer
+ * than MIN_SENSOR_DISTANCE to the receiver. */
+static long setup_block(sasnav_op *op, const ping_geometry *g, int l, int b, int *bad)
+{
+    int n0 = b * BLOCK, count = op->n_points - n0 < BLOCK ? op->n_points - n0 : BLOCK;
+    size_t q0 = ((size_t)b * (size_t)op->n_rx + (size_t)l) * BLOCK;
+    const double *restrict x = op->x + n0, *restrict y = op->y + n0;
+    const double *restrict r_tx = op->tx_range + n0, *restrict gain_tx = op->tx_gain + n0;
+    int32_t *restrict index = op->index + q0;
+    float *restrict green = op->green + 2 * q0;
+    float t[BLOCK], keep[BLOCK];
+    double u_rx = op->array.rx_u[l];
+    double xr = g->ar_x + u_rx * g->ar_cos, yr = g->ar_y + u_rx * g->ar_sin;
+    double hz2 = op->array.rx_height * op->array.rx_height;
+    double inv_c = 1.0 / op->sys.sound_speed, inv_h = 1.0 / op->h, two_f0 = 2.0 * op->sys.f0;
+    double half = 0.5 * op->kernel.width, u_max = op->lf - half;
+    sasnav_attenuation model = op->sys.attenuation;
+    long dropped = 0;
+    int near = 0;
+#pragma omp simd reduction(+ : dropped, near)
+    for (int i = 0; i < count; i++) {
+        double dx = x[i] - xr, dy = y[i] - yr;
+        double r_r = sqrt(dx * dx + dy * dy + hz2), r_t = r_tx[i];
+        near += !(r_r >= MIN_SENSOR_DISTANCE);
+        double r_safe = r_r > 0.0 ? r_r : 1.0;
+        double tau = (r_t + r_r) * inv_c;
+        double u = (tau - op->grid_start) * inv_h; /* fine-grid coordinate */
+        int in = u >= half && u <= u_max;
+        dropped += !in;
+        /* Kernel covers i0 .. i0 + w - 1, i0 = ceil(u - w/2) >= 0. */
+        double v = in ? u - half : 0.0;
+        double i0 = (double)(int32_t)v;
+        i0 += i0 < v ? 1.0 : 0.0;
+        index[i] = in ? (int32_t)i0 : 0;
+        t[i] = (float)(2.0 * (i0 - v) - 1.0);
+        keep[i] = in ? 1.0f : 0.0f;
+        double pattern = g->rx_aperture > 0.0
+                             ? sinc_pi(g->rx_aperture * (dx * g->ar_cos + dy * g->ar_sin) / r_safe)
+                             : 1.0;
+        double alpha = in ? gain_tx[i] * pattern * attenuation(model, r_t, r_safe) : 0.0;
+        /* G = alpha exp(-j 2 pi f0 tau) = alpha (cos(pi 2 f0 tau) - j sin(...));
+         * 2 f0 tau (~8000 at 10 m) is reduced in double inside sincospi. */
+        double sn, cs;
+        sincospi(in ? two_f0 * tau : 0.0, &sn, &cs);
+        green[2 * i] = (float)(alpha * cs);
+        green[2 * i + 1] = (float)(-alpha * sn);
+    }
+    op->taps_eval(op, count, t, keep, op->taps + q0 * (size_t)op->wpad);
+    *bad += near;
+    return dropped;
+}
+
+/* Index of the first point within MIN_SENSOR_DISTANCE of (sx, sy, height). */
+static int find_near_point(const sasnav_op *op, double sx, double sy, double height)
+{
+    for (int n = 0; n < op->n_points; n++) {
+        double dx = op->x[n] - sx, dy = op->y[n] - sy;
+        if (!(sqrt(dx * dx + dy * dy + height * height) >= MIN_SENSOR_DISTANCE)) return n;
+    }
+    return 0;
+}
+
+static int geometry_error(const sasnav_op *op, const ping_geometry *g)
+{
+    int n = find_near_point(op, g->tx_x, g->tx_y, op->array.tx_height);
+    double dx = op->x[n] - g->tx_x, dy = op->y[n] - g->tx_y, h = op->array.tx_height;
+    if (!(sqrt(dx * dx + dy * dy + h * h) >= MIN_SENSOR_DISTANCE))
+        return sasnav_set_error(SASNAV_ERR_GEOMETRY, "op: point %d (%g, %g) coincides with the Tx",
+                                n, op->x[n], op->y[n]);
+    for (int l = 0; l < op->n_rx; l++) {
+        double u = op->array.rx_u[l];
+        double xr = g->ar_x + u * g->ar_cos, yr = g->ar_y + u * g->ar_sin;
+        n = find_near_point(op, xr, yr, op->array.rx_height);
+        dx = op->x[n] - xr;
+        dy = op->y[n] - yr;
+        h = op->array.rx_height;
+        if (!(sqrt(dx * dx + dy * dy + h * h) >= MIN_SENSOR_DISTANCE))
+            return sasnav_set_error(SASNAV_ERR_GEOMETRY,
+                                    "op: point %d (%g, %g) coincides with receiver %d", n,
+                                    op->x[n], op->y[n], l);
+    }
+    return sasnav_set_error(SASNAV_ERR_GEOMETRY, "op: a point coincides with a sensor");
+}
+
+int sasnav_op_set_geometry(sasnav_op *op, const sasnav_ping_pose *ping)
+{
+    if (!op || !ping) return sasnav_set_error(SASNAV_ERR_ARG, "op: set_geometry with NULL argument");
+    if (!check_pose(ping->tx) || !check_pose(ping->array))
+        return sasnav_set_error(SASNAV_ERR_ARG, "op: ping pose is not finite");
+    op->have_geometry = 0;
+    double lambda = sasnav_wavelength(&op->sys);
+    int beams = op->sys.beam_pattern;
+    ping_geometry g = {ping->tx.x, ping->tx.y, cos(ping->tx.theta), sin(ping->tx.theta),
+                       beams ? op->array.tx_length / lambda : 0.0,
+                       ping->array.x, ping->array.y, cos(ping->array.theta),
+                       sin(ping->array.theta), beams ? op->array.rx_length / lambda : 0.0};
+    long dropped = 0;
+    int bad = 0, n_tasks = op->n_blocks * op->n_rx;
+#pragma omp parallel num_threads(op->nthreads) reduction(+ : dropped, bad)
+    {
+#pragma omp for schedule(static)
+        for (int b = 0; b < op->n_blocks; b++) {
+            int n0 = b * BLOCK, n1 = n0 + BLOCK < op->n_points ? n0 + BLOCK : op->n_points;
+            bad += setup_tx(op, &g, n0, n1);
+        }
+#pragma omp for schedule(static)
+        for (int task = 0; task < n_tasks; task++)
+            dropped += setup_block(op, &g, task % op->n_rx, task / op->n_rx, &bad);
+    }
+    if (bad) return geometry_error(op, &g);
+    op->n_dropped = dropped;
+    op->have_geometry = 1;
+    return SASNAV_OK;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Forward and adjoint. */
+
+static void fft(fftwf_plan plan, float *buf)
+{
+    fftwf_execute_dft(plan, (fftwf_complex *)buf, (fftwf_complex *)buf);
+}
+
+static void forward_channel(const sasnav_op *op, int l, const sasnav_cfloat *rho,
+                            sasnav_cfloat *out, op_work *w)
+{
+    int lf = op->lf, mp = op->mp, ext = op->ext, kmax = op->kmax;
+    size_t fine = (size_t)lf + (size_t)ext;
+    float *restrict re = w->re, *restrict im = w->im;
+    float *restrict ff = w->fine, *restrict fc = w->coarse;
+    memset(re, 0, fine * sizeof(float));
+    memset(im, 0, fine * sizeof(float));
+    op->spread(op, l, rho, re, im);
+    for (int j = 0; j < ext; j++) { /* periodic wrap of the extension */
+        re[j] += re[lf + j];
+        im[j] += im[lf + j];
+    }
+    for (int j = 0; j < lf; j++) {
+        ff[2 * j] = re[j];
+        ff[2 * j + 1] = im[j];
+    }
+    fft(op->fine_fwd, ff);
+    memset(fc, 0, 2 * (size_t)mp * sizeof(float));
+    for (int k = -kmax; k <= kmax; k++) {
+        int kf = k < 0 ? k + lf : k, kc = k < 0 ? k + mp : k;
+        float r = op->spectral[k + kmax];
+        fc[2 * kc] = r * ff[2 * kf];
+        fc[2 * kc + 1] = r * ff[2 * kf + 1];
+    }
+    fft(op->coarse_bwd, fc);
+    memcpy(out, fc + 2 * op->pad, (size_t)op->n_samples * sizeof(sasnav_cfloat));
+}
+
+/* The transposed steps of forward_channel up to the fine grid, which is left
+ * (split, with its periodic extension) in op->adj_re/adj_im for channel l. */
+static void adjoint_channel(const sasnav_op *op, int l, const sasnav_cfloat *data, op_work *w)
+{
+    int lf = op->lf, mp = op->mp, ext = op->ext, kmax = op->kmax;
+    size_t fine = (size_t)lf + (size_t)ext;
+    float *restrict ff = w->fine, *restrict fc = w->coarse;
+    memset(fc, 0, 2 * (size_t)mp * sizeof(float));
+    memcpy(fc + 2 * op->pad, data, (size_t)op->n_samples * sizeof(sasnav_cfloat));
+    fft(op->coarse_fwd, fc);
+    memset(ff, 0, 2 * (size_t)lf * sizeof(float));
+    for (int k = -kmax; k <= kmax; k++) {
+        int kf = k < 0 ? k + lf : k, kc = k < 0 ? k + mp : k;
+        float r = op->spectral[k + kmax];
+        ff[2 * kf] = r * fc[2 * kc];
+        ff[2 * kf + 1] = r * fc[2 * kc + 1];
+    }
+    fft(op->fine_bwd, ff);
+    float *restrict re = op->adj_re + (size_t)l * fine, *restrict im = op->adj_im + (size_t)l * fine;
+    for (int j = 0; j < lf; j++) {
+        re[j] = ff[2 * j];
+        im[j] = ff[2 * j + 1];
+    }
+    for (int j = 0; j < ext; j++) {
+        re[lf + j] = re[j];
+        im[lf + j] = im[j];
+    }
+}
+
+static int check_apply(const sasnav_op *op, const void *in, const void *out)
+{
+    if (!op || !in || !out) return sasnav_set_error(SASNAV_ERR_ARG, "op: NULL argument");
+    if (!op->have_geometry)
+        return sasnav_set_error(SASNAV_ERR_ARG, "op: sasnav_op_set_geometry has not succeeded");
+    return SASNAV_OK;
+}
+
+int sasnav_op_forward(sasnav_op *op, const sasnav_cfloat *rho, sasnav_cfloat *data)
+{
+    int rc = check_apply(op, rho, data);
+    if (rc) return rc;
+#pragma omp parallel for num_threads(op->nthreads) schedule(static)
+    for (int l = 0; l < op->n_rx; l++)
+        forward_channel(op, l, rho, data + (size_t)l * (size_t)op->n_samples,
+                        &op->work[omp_get_thread_num()]);
+    return SASNAV_OK;
+}
+
+static int adjoint(sasnav_op *op, const sasnav_cfloat *data, sasnav_cfloat *rho, int accumulate)
+{
+    int rc = check_apply(op, data, rho);
+    if (rc) return rc;
+#pragma omp parallel num_threads(op->nthreads)
+    {
+        op_work *w = &op->work[omp_get_thread_num()];
+#pragma omp for schedule(static)
+        for (int l = 0; l < op->n_rx; l++)
+            adjoint_channel(op, l, data + (size_t)l * (size_t)op->n_samples, w);
+#pragma omp for schedule(static)
+        for (int b = 0; b < op->n_blocks; b++) op->interp(op, b, rho, accumulate);
+    }
+    return SASNAV_OK;
+}
+
+int sasnav_op_adjoint(sasnav_op *op, const sasnav_cfloat *data, sasnav_cfloat *rho)
+{
+    return adjoint(op, data, rho, 0);
+}
+
+int sasnav_op_adjoint_add(sasnav_op *op, const sasnav_cfloat *data, sasnav_cfloat *rho)
+{
+    return adjoint(op, data, rho, 1);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Accessors. */
+
+int sasnav_op_n_points(const sasnav_op *op) { return op ? op->n_points : 0; }
+int sasnav_op_n_rx(const sasnav_op *op) { return op ? op->n_rx : 0; }
+int sasnav_op_n_samples(const sasnav_op *op) { return op ? op->n_samples : 0; }
+double sasnav_op_period(const sasnav_op *op) { return op ? op->period : 0.0; }
+long sasnav_op_n_dropped(const sasnav_op *op) { return op ? op->n_dropped : 0; }
+int sasnav_op_kernel_width(const sasnav_op *op) { return op ? op->kernel.width : 0; }
