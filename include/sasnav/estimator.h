@@ -47,7 +47,9 @@ typedef struct {
     double tx_lag;         /* m, EPCA Tx-array offset (default 0.10) */
     double range;          /* m, centre range of the estimation grid (default 10) */
     double range_extent;   /* m, range extent of the grid (default 1.6) */
-    double cross_extent;   /* m, along-track extent of the grid (default 1.0) */
+    double cross_extent;   /* m, along-track extent of the grid (default 0: the
+                              element beam's footprint between first nulls at
+                              the grid's range, 2 R lambda / D, 2 m in paper-pair) */
     double pixel;          /* m, pixel size (default: min(D/4, c/(4B))) */
     double coarse_pixel;   /* m, pixel of the global stage (default 2 * pixel) */
     double blur;           /* m, range sigma of the Gaussian blur of the global
@@ -57,7 +59,9 @@ typedef struct {
                               its grating-lobe ambiguity) */
     sasnav_pose prior;     /* prior motion error (default 0) */
     sasnav_pose box;       /* half-widths of the search box around the prior
-                              (default 0.06 m, 0.035 m, 0.06 rad) */
+                              (default 0.06 m, 0.035 m and, for yaw, 0 = auto:
+                              90 % of lambda / (4 d), d the phase-centre
+                              spacing, i.e. 0.045 rad in paper-pair) */
     sasnav_pose grid_step; /* steps of the global grid (default 0.01 m, 0.01 m, 0.01 rad) */
     int global_stage;      /* 1 (default): run the global stage; 0: local only */
     double min_overlap;    /* minimum ||psi|| / ||rho|| before "no overlap" (1e-3) */
@@ -100,8 +104,10 @@ int sasnav_pair_set_data(sasnav_pair *pair, const sasnav_cfloat *data_p,
                          const sasnav_cfloat *data_q, sasnav_pose nominal);
 
 /* Evaluates zeta and eta at a hypothesised MOTION ERROR (displacement =
- * nominal + error) with the final (k, i) (level 1) or the coarse ones
- * (level 0; blurred when blurred != 0). Either output may be NULL.
+ * nominal + error). level 0: coarse pixels, coarse (k, i); level 1: full
+ * pixels, coarse (k, i); level 2: full pixels, final (k, i). blurred != 0
+ * blurs the moduli before zeta (global-stage criterion). Either output may
+ * be NULL.
  * overlap (may be NULL) receives ||psi_p|| / ||rho_p||. */
 int sasnav_pair_eval(sasnav_pair *pair, sasnav_pose error, int level, int blurred,
                      double *zeta, double *eta, double *overlap);
@@ -111,6 +117,8 @@ int sasnav_pair_estimate(sasnav_pair *pair, sasnav_pair_result *result);
 
 /* The estimator's grid (p's centroid frame). */
 const sasnav_grid *sasnav_pair_grid(const sasnav_pair *pair);
+/* The options in use, with the automatic values resolved. */
+const sasnav_pair_opts *sasnav_pair_options(const sasnav_pair *pair);
 /* Operator applications so far. */
 long sasnav_pair_applications(const sasnav_pair *pair);
 

@@ -7,7 +7,10 @@
  * and every value (finite navigation, positive sizes) and return
  * SASNAV_ERR_IO (missing/unreadable file) or SASNAV_ERR_FORMAT (corrupt,
  * truncated, wrong shape, missing dataset) with a message naming the problem.
- * HDF5's own error printing is silenced.
+ * HDF5's own error printing is silenced (and restored on return).
+ *
+ * Thread safety: none of these functions may run concurrently with each
+ * other or with other HDF5 use in the process (serial HDF5 build).
  */
 #ifndef SASNAV_IO_H
 #define SASNAV_IO_H

@@ -23,12 +23,12 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->tx_lag = 0.10;
     o->range = 10.0;
     o->range_extent = 1.6;
-    o->cross_extent = 1.0;
+    o->cross_extent = 0.0;
     o->pixel = 0.0;
     o->coarse_pixel = 0.0;
     o->blur = 0.075;
     o->blur_cross = 0.0;
-    o->box = (sasnav_pose){0.06, 0.035, 0.06};
+    o->box = (sasnav_pose){0.06, 0.035, 0.0};
     o->grid_step = (sasnav_pose){0.01, 0.01, 0.01};
     o->global_stage = 1;
     o->min_overlap = 1e-3;
@@ -67,6 +67,7 @@ static void level_free(pair_level *lv)
 static int level_init(sasnav_pair *pr, pair_level *lv, double pixel, int k, int i)
 {
     const sasnav_pair_opts *o = &pr->opts;
+    memset(lv, 0, sizeof *lv);
     int nx = (int)floor(o->cross_extent / pixel) + 1;
     int ny = (int)floor(o->range_extent / pixel) + 1;
     if (nx < 2 || ny < 2)
@@ -154,7 +155,7 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
     else sasnav_pair_default_opts(&pr->opts);
     sasnav_pair_opts *o = &pr->opts;
     if (o->k < 1 || o->i < 1 || o->coarse_k < 1 || o->coarse_i < 1 || !(o->range > 0) ||
-        !(o->range_extent > 0) || !(o->cross_extent > 0) || !(o->tx_lag >= 0) ||
+        !(o->range_extent > 0) || !(o->cross_extent >= 0) || !(o->tx_lag >= 0) ||
         !isfinite(o->range + o->range_extent + o->cross_extent + o->tx_lag + o->blur) ||
         !(o->blur >= 0) || !(o->box.x >= 0 && o->box.y >= 0 && o->box.theta >= 0)) {
         free(pr);
@@ -165,6 +166,23 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
         if (array->rx_length > 0 && array->rx_length / 4.0 < o->pixel) o->pixel = array->rx_length / 4.0;
     }
     if (!(o->coarse_pixel > 0)) o->coarse_pixel = 2.0 * o->pixel;
+    double lambda = sasnav_wavelength(sys);
+    double dmax = array->rx_length > array->tx_length ? array->rx_length : array->tx_length;
+    if (!(o->cross_extent > 0)) {
+        /* The along-track footprint between the first nulls of the element
+         * beam at the grid's range: echoes from outside the grid would be
+         * folded into it and bias the estimate. */
+        o->cross_extent = dmax > lambda ? 2.0 * o->range * lambda / sqrt(dmax * dmax - lambda * lambda) : 4.0;
+        if (o->cross_extent < 0.5) o->cross_extent = 0.5;
+        if (o->cross_extent > 4.0) o->cross_extent = 4.0;
+    }
+    if (!(o->box.theta > 0)) {
+        /* Yaw is unambiguous within +-lambda / (4 d) of the truth, d the
+         * phase-centre spacing (a grating lobe of the phase-centre sampling
+         * sits lambda / (2 d) away): stay within 90 % of it. */
+        double d = array->n_rx > 1 ? 0.5 * fabs(array->rx_u[1] - array->rx_u[0]) : dmax / 2.0;
+        o->box.theta = d > 0 ? 0.9 * lambda / (4.0 * d) : 0.05;
+    }
     pr->local = sasnav_epca_local(o->tx_lag, 0.0);
     pr->nd = (size_t)array->n_rx * win->n_samples;
     pr->data_p = malloc(sizeof(sasnav_cfloat) * pr->nd);
@@ -174,7 +192,8 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
         return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     }
     rc = level_init(pr, &pr->level[0], o->coarse_pixel, o->coarse_k, o->coarse_i);
-    if (!rc) rc = level_init(pr, &pr->level[1], o->pixel, o->k, o->i);
+    if (!rc) rc = level_init(pr, &pr->level[1], o->pixel, o->coarse_k, o->coarse_i);
+    if (!rc) rc = level_init(pr, &pr->level[2], o->pixel, o->k, o->i);
     if (rc) {
         sasnav_pair_destroy(pr);
         return rc;
@@ -186,8 +205,7 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
 void sasnav_pair_destroy(sasnav_pair *pr)
 {
     if (!pr) return;
-    level_free(&pr->level[0]);
-    level_free(&pr->level[1]);
+    for (int v = 0; v < PAIR_LEVELS; v++) level_free(&pr->level[v]);
     free(pr->data_p);
     free(pr->data_q);
     free(pr);
@@ -227,7 +245,7 @@ int sasnav_pair_set_data(sasnav_pair *pr, const sasnav_cfloat *data_p,
     memcpy(pr->data_q, data_q, sizeof(sasnav_cfloat) * pr->nd);
     pr->nominal = nominal;
     double xc = 0.5 * nominal.x;
-    for (int v = 0; v < 2 && !rc; v++) rc = level_make_ops(pr, &pr->level[v], xc);
+    for (int v = 0; v < PAIR_LEVELS && !rc; v++) rc = level_make_ops(pr, &pr->level[v], xc);
     pr->ready = (rc == 0);
     return rc;
 }
@@ -283,7 +301,7 @@ static void blur_map(const sasnav_grid *g, double sigma_x, double sigma_y, doubl
 int sasnav_pair_eval(sasnav_pair *pr, sasnav_pose error, int level, int blurred, double *zeta,
                      double *eta, double *overlap)
 {
-    if (!pr || level < 0 || level > 1) return sasnav_set_error(SASNAV_ERR_ARG, "bad evaluation arguments");
+    if (!pr || level < 0 || level >= PAIR_LEVELS) return sasnav_set_error(SASNAV_ERR_ARG, "bad evaluation arguments");
     if (!pr->ready) return sasnav_set_error(SASNAV_ERR_ARG, "estimator has no data (call set_data)");
     if (!isfinite(error.x) || !isfinite(error.y) || !isfinite(error.theta))
         return sasnav_set_error(SASNAV_ERR_ARG, "hypothesis is not finite");
@@ -361,5 +379,6 @@ int sasnav_pair_eval(sasnav_pair *pr, sasnav_pose error, int level, int blurred,
     return SASNAV_OK;
 }
 
-const sasnav_grid *sasnav_pair_grid(const sasnav_pair *pr) { return &pr->level[1].grid; }
+const sasnav_grid *sasnav_pair_grid(const sasnav_pair *pr) { return &pr->level[PAIR_LEVELS - 1].grid; }
+const sasnav_pair_opts *sasnav_pair_options(const sasnav_pair *pr) { return &pr->opts; }
 long sasnav_pair_applications(const sasnav_pair *pr) { return pr->applications; }

@@ -7,6 +7,8 @@
 #include "sasnav/error.h"
 #include "sasnav/estimator.h"
 
+#define PAIR_LEVELS 3
+
 typedef struct {
     int k, i;
     sasnav_grid grid;
@@ -27,7 +29,7 @@ struct sasnav_pair {
     sasnav_cfloat *data_p, *data_q;
     sasnav_pose nominal;
     int ready;
-    pair_level level[2];
+    pair_level level[PAIR_LEVELS];
     long applications;
     int evaluations;
 };

@@ -15,6 +15,7 @@
 
 #include <math.h>
 #include <nlopt.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
@@ -80,21 +81,70 @@ static int local_stage(stage_ctx *c, sasnav_pose start, sasnav_pose step, double
     return res == NLOPT_MAXEVAL_REACHED ? SASNAV_ERR_NOT_CONVERGED : SASNAV_OK;
 }
 
+/* Grid point (surge index, yaw index) of the global stage's 2-D scan. */
+typedef struct {
+    sasnav_pose e;
+    double f;
+} candidate;
+
+#define MAX_CANDIDATES 3
+
 static int global_stage(sasnav_pair *pr, sasnav_pose *best, int *evals)
 {
-    const sasnav_pair_opts *o = &pr->opts;
+    const sasnav_pair_opts *o = sasnav_pair_options(pr);
     sasnav_pose c = o->prior, s = o->grid_step, b = o->box;
-    int nx = s.x > 0 ? (int)floor(b.x / s.x) : 0;
-    int ny = s.y > 0 ? (int)floor(b.y / s.y) : 0;
-    int nt = s.theta > 0 ? (int)floor(b.theta / s.theta) : 0;
-    double fbest = HUGE_VAL;
-    sasnav_pose e = c, arg = c;
-    int n = 0, rc;
-    for (int ix = -nx; ix <= nx; ix++)
-        for (int it = -nt; it <= nt; it++) {
-            e.x = c.x + ix * s.x;
-            e.theta = c.theta + it * s.theta;
-            e.y = c.y;
+    int nx = s.x > 0 ? (int)floor(b.x / s.x + 1e-9) : 0;
+    int ny = s.y > 0 ? (int)floor(b.y / s.y + 1e-9) : 0;
+    int nt = s.theta > 0 ? (int)floor(b.theta / s.theta + 1e-9) : 0;
+    int wx = 2 * nx + 1, wt = 2 * nt + 1;
+    double *f = malloc(sizeof(double) * wx * wt);
+    if (!f) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    int n = 0, rc = SASNAV_OK;
+    /* 1. Scan (surge, yaw) at the prior sway: the blurred zeta (blur along
+     *    range only) is smooth along sway but keeps the cross-range detail
+     *    that separates the true yaw from its grating-lobe ambiguity. */
+    for (int ix = -nx; ix <= nx && !rc; ix++)
+        for (int it = -nt; it <= nt && !rc; it++) {
+            sasnav_pose e = {c.x + ix * s.x, c.y, c.theta + it * s.theta};
+            rc = sasnav_pair_eval(pr, e, 0, 1, &f[(ix + nx) * wt + it + nt], NULL, NULL);
+            n++;
+        }
+    /* 2. Keep the lowest few local minima of the scan. */
+    candidate cand[MAX_CANDIDATES];
+    int nc = 0;
+    for (int ix = 0; ix < wx && !rc; ix++)
+        for (int it = 0; it < wt; it++) {
+            double v = f[ix * wt + it];
+            int is_min = 1;
+            for (int dx = -1; dx <= 1; dx++)
+                for (int dt = -1; dt <= 1; dt++) {
+                    int jx = ix + dx, jt = it + dt;
+                    if ((dx || dt) && jx >= 0 && jx < wx && jt >= 0 && jt < wt && f[jx * wt + jt] < v)
+                        is_min = 0;
+                }
+            if (!is_min) continue;
+            candidate cd = {{c.x + (ix - nx) * s.x, c.y, c.theta + (it - nt) * s.theta}, v};
+            int pos = nc < MAX_CANDIDATES ? nc : MAX_CANDIDATES;
+            while (pos > 0 && cand[pos - 1].f > v) {
+                if (pos < MAX_CANDIDATES) cand[pos] = cand[pos - 1];
+                pos--;
+            }
+            if (pos < MAX_CANDIDATES) {
+                cand[pos] = cd;
+                if (nc < MAX_CANDIDATES) nc++;
+            }
+        }
+    free(f);
+    if (rc) return rc;
+    /* 3. For each candidate: scan sway, refine the blurred zeta locally,
+     *    then rank by the plain (unblurred) zeta. */
+    double best_plain = HUGE_VAL;
+    for (int k = 0; k < nc; k++) {
+        sasnav_pose e = cand[k].e, arg = e;
+        double fbest = cand[k].f;
+        for (int iy = -ny; iy <= ny; iy++) {
+            if (iy == 0) continue;
+            e.y = c.y + iy * s.y;
             double z;
             if ((rc = sasnav_pair_eval(pr, e, 0, 1, &z, NULL, NULL))) return rc;
             n++;
@@ -103,27 +153,22 @@ static int global_stage(sasnav_pair *pr, sasnav_pose *best, int *evals)
                 arg = e;
             }
         }
-    e = arg;
-    for (int iy = -ny; iy <= ny; iy++) {
-        if (iy == 0) continue;
-        e.y = c.y + iy * s.y;
-        double z;
-        if ((rc = sasnav_pair_eval(pr, e, 0, 1, &z, NULL, NULL))) return rc;
+        stage_ctx ctx = {.pr = pr, .level = 0, .blurred = 1};
+        sasnav_pose refined;
+        double fr;
+        rc = local_stage(&ctx, arg, s, 1.5, 0.02, o->max_evaluations, &refined, &fr);
+        n += ctx.evals;
+        if (rc && rc != SASNAV_ERR_NOT_CONVERGED) return rc;
+        if (!(fr < fbest)) refined = arg;
+        double plain;
+        if ((rc = sasnav_pair_eval(pr, refined, 0, 0, &plain, NULL, NULL))) return rc;
         n++;
-        if (z < fbest) {
-            fbest = z;
-            arg = e;
+        if (plain < best_plain) {
+            best_plain = plain;
+            *best = refined;
         }
     }
-    /* Bounded local refinement of the blurred zeta, one grid step around. */
-    stage_ctx ctx = {.pr = pr, .level = 0, .blurred = 1};
-    sasnav_pose refined;
-    double f;
-    rc = local_stage(&ctx, arg, s, 1.5, 0.02, o->max_evaluations, &refined, &f);
-    n += ctx.evals;
     *evals = n;
-    if (rc && rc != SASNAV_ERR_NOT_CONVERGED) return rc;
-    *best = f < fbest ? refined : arg;
     return SASNAV_OK;
 }
 
@@ -141,7 +186,7 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     if (!pr->ready) return sasnav_set_error(SASNAV_ERR_ARG, "estimator has no data (call set_data)");
     double t0 = now_seconds();
     long apps0 = pr->applications;
-    const sasnav_pair_opts *o = &pr->opts;
+    const sasnav_pair_opts *o = sasnav_pair_options(pr);
     double lambda = sasnav_wavelength(&pr->sys);
     double range = o->range;
     double pc_spacing = pr->array.n_rx > 1 ? fabs(pr->array.rx_u[1] - pr->array.rx_u[0]) / 2.0 : 0.025;
@@ -167,8 +212,9 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     res->global_stage = start;
     res->evaluations_global = nglob;
 
-    /* Zeta stage: steps of a tenth of a phase-centre spacing in surge and
-     * sway, and the yaw that moves the scene by that much at the range. */
+    /* Zeta stage (level 1: full pixels, coarse iterations): steps of a
+     * fifth of a phase-centre spacing in surge and sway, and the yaw that
+     * moves the scene by as much at the grid's range. */
     stage_ctx ctx = {.pr = pr, .level = 1};
     sasnav_pose zstep = {0.2 * pc_spacing, 0.2 * pc_spacing, 0.2 * pc_spacing / range};
     sasnav_pose zbest;
@@ -179,10 +225,11 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     res->zeta_stage = zbest;
     res->zeta = zval;
 
-    /* Eta stage: steps lambda/40 in sway (bounds +-lambda/4: one fringe),
-     * a 25th of the phase-centre spacing in surge and twice the matching
-     * yaw (bounds +-10 steps). Try the fringes on each side of the zeta
-     * result when eta is lower there. */
+    /* Eta stage, first at level 1 then at level 2 (final k, i): steps of
+     * lambda/40 in sway (bounds +-lambda/4: one fringe), a 25th of the
+     * phase-centre spacing in surge and twice the matching yaw (bounds +-10
+     * steps). The fringes either side of the zeta result are tried too and
+     * kept when eta is lower there. */
     ctx.use_eta = 1;
     sasnav_pose estep = {pc_spacing / 25.0, lambda / 40.0, 2.0 * pc_spacing / 25.0 / range};
     sasnav_pose best = zbest;
@@ -209,12 +256,23 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
             erc = r;
         }
     }
+    if (o->k != o->coarse_k || o->i != o->coarse_i) {
+        ctx.level = 2;
+        sasnav_pose fstep = {estep.x / 2, estep.y / 2, estep.theta / 2};
+        sasnav_pose b;
+        double f;
+        erc = local_stage(&ctx, best, fstep, 10.0, 0.02, o->max_evaluations, &b, &f);
+        nevals += ctx.evals;
+        if (erc && erc != SASNAV_ERR_NOT_CONVERGED) return erc;
+        best = b;
+        fbest = f;
+    }
     res->evaluations_eta = nevals;
     res->eta = fbest;
     res->error = best;
     res->displacement = (sasnav_pose){pr->nominal.x + best.x, pr->nominal.y + best.y,
                                       pr->nominal.theta + best.theta};
-    rc = sasnav_pair_eval(pr, best, 1, 0, NULL, NULL, &res->overlap);
+    rc = sasnav_pair_eval(pr, best, PAIR_LEVELS - 1, 0, NULL, NULL, &res->overlap);
     if (rc) return rc;
     res->evaluations = 1 + nglob + res->evaluations_zeta + res->evaluations_eta + 1;
     res->applications = pr->applications - apps0;

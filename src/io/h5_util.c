@@ -164,6 +164,7 @@ int h5_open_read(h5_ctx *c, const char *const *formats, int n_formats, char *fou
     struct stat st;
     if (stat(c->path, &st) != 0) return h5_fail(c, SASNAV_ERR_IO, "cannot open: %s", strerror(errno));
     if (S_ISDIR(st.st_mode)) return h5_fail(c, SASNAV_ERR_IO, "cannot open: is a directory");
+    if (!S_ISREG(st.st_mode)) return h5_fail(c, SASNAV_ERR_IO, "cannot open: not a regular file");
     int fd = open(c->path, O_RDONLY | O_CLOEXEC);
     if (fd < 0) return h5_fail(c, SASNAV_ERR_IO, "cannot open: %s", strerror(errno));
     close(fd);
