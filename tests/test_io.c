@@ -425,7 +425,7 @@ static void test_bad_run_files(void)
 
     /* /raw not compound (float32) */
     hsize_t d3[3] = {4, 3, 16};
-    float *zeros = calloc(2 * 4 * 3 * 16, sizeof(float));
+    float *zeros = calloc(3 * 4 * 3 * 16, sizeof(float)); /* up to 3 members */
     path = fresh_run_file("real.h5", 0);
     f = open_rw(path);
     replace_dataset(f, "/raw", H5T_NATIVE_FLOAT, 3, d3, zeros);
@@ -438,6 +438,25 @@ static void test_bad_run_files(void)
     hid_t bad = complex_type(H5T_NATIVE_FLOAT, 4, "re", "im");
     replace_dataset(f, "/raw", bad, 3, d3, zeros);
     H5Tclose(bad);
+    H5Fclose(f);
+    CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
+
+    /* a third member, or integer members */
+    path = fresh_run_file("members3.h5", 0);
+    f = open_rw(path);
+    hid_t c3 = H5Tcreate(H5T_COMPOUND, 12);
+    H5Tinsert(c3, "r", 0, H5T_NATIVE_FLOAT);
+    H5Tinsert(c3, "i", 4, H5T_NATIVE_FLOAT);
+    H5Tinsert(c3, "w", 8, H5T_NATIVE_FLOAT);
+    replace_dataset(f, "/raw", c3, 3, d3, zeros);
+    H5Tclose(c3);
+    H5Fclose(f);
+    CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
+    path = fresh_run_file("intmembers.h5", 0);
+    f = open_rw(path);
+    hid_t ci = complex_type(H5T_NATIVE_INT, 4, "r", "i");
+    replace_dataset(f, "/raw", ci, 3, d3, zeros);
+    H5Tclose(ci);
     H5Fclose(f);
     CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
 
@@ -459,6 +478,33 @@ static void test_bad_run_files(void)
     CHECK(run && ref && runs_identical(run, ref), "float64 {i, r} raw not converted exactly");
     sasnav_run_free(run);
     run = NULL;
+
+    /* /raw claiming a million pings with one ping stored: rejected before
+     * anything is allocated for it */
+    path = fresh_run_file("sparse.h5", 0);
+    f = open_rw(path);
+    H5Ldelete(f, "/raw", H5P_DEFAULT);
+    hsize_t big[3] = {1000000, 3, 16}, chunk[3] = {1, 3, 16}, start[3] = {0, 0, 0};
+    hid_t space = H5Screate_simple(3, big, NULL), dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(dcpl, 3, chunk);
+    hid_t dset = H5Dcreate2(f, "/raw", c32, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+    hid_t mspace = H5Screate_simple(3, chunk, NULL);
+    H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, chunk, NULL);
+    CHECK(H5Dwrite(dset, c32, mspace, space, H5P_DEFAULT, zeros) >= 0, "cannot write one ping");
+    H5Sclose(mspace);
+    H5Dclose(dset);
+    H5Pclose(dcpl);
+    H5Sclose(space);
+    H5Fclose(f);
+    CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
+    CHECK(strstr(sasnav_last_error(), "incomplete") != NULL, "message should say the data is incomplete");
+    /* a dataset created but never written */
+    path = fresh_run_file("unwritten.h5", 0);
+    f = open_rw(path);
+    hsize_t dn4[2] = {4, 3};
+    replace_dataset(f, "/nav/tx", H5T_NATIVE_DOUBLE, 2, dn4, NULL);
+    H5Fclose(f);
+    CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
 
     /* NaN in raw samples */
     path = fresh_run_file("nanraw.h5", 0);

@@ -32,6 +32,7 @@
 #include "testutil.h"
 
 #include <dirent.h>
+#include <ctype.h>
 #include <errno.h>
 #include <execinfo.h>
 #include <sys/stat.h>
@@ -260,7 +261,10 @@ static int fault_in_hdf5(void)
             fclose(f);
             return 0;
         }
-        int frame = (strstr(line, "    #") && strstr(line, " 0x")) || strstr(line, "[0x");
+        /* Sanitizer frames: "    #3 0x... in f file"; glibc backtrace_symbols:
+         * "module(function+0x..)[0x...]". */
+        const char *p = line + strspn(line, " \t");
+        int frame = (p[0] == '#' && isdigit((unsigned char)p[1]) && strstr(p, " 0x")) || strstr(line, ")[0x");
         if (!frame) {
             in_stack = 0;
             continue;

@@ -149,6 +149,28 @@ static void test_quadrature_and_kernel(void)
             CHECK(fabs(f1[i] - f2[i]) < 1e-12 * f2[0], "w %d xi %g: %g vs %g", wd, xi[i], f1[i],
                   f2[i]);
     }
+    /* Polynomial taps (what the operator stores): for each width, the fit of
+     * degree sasnav_kernel_taps_degree against phi itself over the whole
+     * offset range. Bound: a tenth of the tolerance the width is chosen for
+     * (10^-(w-1)), so the fit adds at most ~10 % to the NUFFT error; 1e-13
+     * below that (double rounding of the monomial conversion; the operator
+     * rounds the taps to float anyway). Measured: ~tol/20 up to w = 13. */
+    for (int wd = 2; wd <= 16; wd++) {
+        sasnav_kernel kw = {wd, 0.98 * M_PI * wd * 0.75};
+        int p = sasnav_kernel_taps_degree(&kw);
+        double coef[(SASNAV_KERNEL_MAX_DEGREE + 1) * 16];
+        CHECK_OK(sasnav_kernel_fit_taps(&kw, p, 16, coef));
+        double err = 0.0;
+        for (int j = 0; j < 16; j++)
+            for (int i = 0; i < 1000; i++) {
+                double d = i / 1000.0, t = 2.0 * d - 1.0, v = 0.0;
+                for (int q = p; q >= 0; q--) v = v * t + coef[q * 16 + j];
+                double ref = j < wd ? sasnav_kernel_eval(&kw, -1.0 + (2.0 / wd) * (j + d)) : 0.0;
+                err = fmax(err, fabs(v - ref));
+            }
+        double bound = fmax(0.1 * pow(10.0, -(wd - 1)), 1e-13);
+        CHECK(err <= bound, "w %d: tap polynomial error %g > %g", wd, err, bound);
+    }
     /* Width from the tolerance: the paper's rule at sigma = 2. */
     sasnav_kernel k;
     for (int d = 2; d <= 9; d++) {

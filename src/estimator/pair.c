@@ -61,6 +61,11 @@ static void level_free(pair_level *lv)
     free(lv->mod_p);
     free(lv->mod_q);
     free(lv->blur_tmp);
+    if (lv->xc_fwd_p) fftwf_destroy_plan(lv->xc_fwd_p);
+    if (lv->xc_fwd_q) fftwf_destroy_plan(lv->xc_fwd_q);
+    if (lv->xc_inv) fftwf_destroy_plan(lv->xc_inv);
+    fftwf_free(lv->xc_p);
+    fftwf_free(lv->xc_q);
     memset(lv, 0, sizeof *lv);
 }
 
@@ -96,6 +101,19 @@ static int level_init(sasnav_pair *pr, pair_level *lv, double pixel, int k, int 
     if (!lv->rho_p || !lv->rho_q || !lv->psi_p || !lv->psi_q || !lv->tmp || !lv->data_tmp ||
         !lv->cgls_work || !lv->mod_p || !lv->mod_q || !lv->blur_tmp)
         return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for the estimator");
+    /* Correlation buffers zero-padded to twice the grid (linear, not
+     * circular, correlation); plans made once here. */
+    lv->xc_nx = 2 * nx;
+    lv->xc_ny = 2 * ny;
+    size_t nxc = (size_t)lv->xc_nx * lv->xc_ny;
+    lv->xc_p = fftwf_malloc(sizeof(fftwf_complex) * nxc);
+    lv->xc_q = fftwf_malloc(sizeof(fftwf_complex) * nxc);
+    if (!lv->xc_p || !lv->xc_q) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for the estimator");
+    lv->xc_fwd_p = fftwf_plan_dft_2d(lv->xc_ny, lv->xc_nx, lv->xc_p, lv->xc_p, FFTW_FORWARD, FFTW_ESTIMATE);
+    lv->xc_fwd_q = fftwf_plan_dft_2d(lv->xc_ny, lv->xc_nx, lv->xc_q, lv->xc_q, FFTW_FORWARD, FFTW_ESTIMATE);
+    lv->xc_inv = fftwf_plan_dft_2d(lv->xc_ny, lv->xc_nx, lv->xc_q, lv->xc_q, FFTW_BACKWARD, FFTW_ESTIMATE);
+    if (!lv->xc_fwd_p || !lv->xc_fwd_q || !lv->xc_inv)
+        return sasnav_set_error(SASNAV_ERR_FFT, "FFTW could not plan the image correlation");
     return SASNAV_OK;
 }
 
@@ -382,3 +400,64 @@ int sasnav_pair_eval(sasnav_pair *pr, sasnav_pose error, int level, int blurred,
 const sasnav_grid *sasnav_pair_grid(const sasnav_pair *pr) { return &pr->level[PAIR_LEVELS - 1].grid; }
 const sasnav_pair_opts *sasnav_pair_options(const sasnav_pair *pr) { return &pr->opts; }
 long sasnav_pair_applications(const sasnav_pair *pr) { return pr->applications; }
+
+/* Loads |v| minus its mean into the zero-padded correlation buffer. */
+static void load_modulus(const pair_level *lv, const sasnav_cfloat *v, fftwf_complex *buf)
+{
+    int nx = lv->grid.nx, ny = lv->grid.ny;
+    double mean = 0;
+    for (size_t j = 0; j < lv->np; j++) mean += cabsf(v[j]);
+    mean /= (double)lv->np;
+    memset(buf, 0, sizeof(fftwf_complex) * (size_t)lv->xc_nx * lv->xc_ny);
+    for (int iy = 0; iy < ny; iy++)
+        for (int ix = 0; ix < nx; ix++)
+            buf[(size_t)iy * lv->xc_nx + ix] = (float)(cabsf(v[(size_t)iy * nx + ix]) - mean);
+}
+
+/* Parabolic sub-sample offset of a peak from three samples. */
+static double parabolic(double a, double b, double c)
+{
+    double d = a - 2 * b + c;
+    return d < 0 ? 0.5 * (a - c) / d : 0.0;
+}
+
+int pair_image_shift(sasnav_pair *pr, int level, sasnav_pose error, double *sx, double *sy)
+{
+    pair_level *lv = &pr->level[level];
+    sasnav_pose sigma = {pr->nominal.x + error.x, pr->nominal.y + error.y, pr->nominal.theta + error.theta};
+    sasnav_ping_pose q = sasnav_ping_place(sigma, &pr->local);
+    int rc = sasnav_op_set_geometry(lv->op_q, &q);
+    if (rc) return rc;
+    sasnav_cgls_opts co = {lv->k, pr->opts.tikhonov};
+    rc = sasnav_cgls(lv->op_q, pr->data_q, &co, lv->rho_q, lv->cgls_work);
+    pr->applications += 1 + 2L * lv->k;
+    if (rc) return rc;
+    load_modulus(lv, lv->rho_p, lv->xc_p);
+    load_modulus(lv, lv->rho_q, lv->xc_q);
+    fftwf_execute(lv->xc_fwd_p);
+    fftwf_execute(lv->xc_fwd_q);
+    size_t n = (size_t)lv->xc_nx * lv->xc_ny;
+    for (size_t j = 0; j < n; j++) lv->xc_q[j] *= conjf(lv->xc_p[j]);
+    fftwf_execute(lv->xc_inv);
+    /* c[s] = sum_z |p|(z) |q|(z + s): its peak is the shift of q's content. */
+    int W = lv->xc_nx, H = lv->xc_ny, bx = 0, by = 0;
+    float best = -HUGE_VALF;
+    for (int iy = 0; iy < H; iy++)
+        for (int ix = 0; ix < W; ix++) {
+            float v = crealf(lv->xc_q[(size_t)iy * W + ix]);
+            if (v > best) {
+                best = v;
+                bx = ix;
+                by = iy;
+            }
+        }
+#define XC(ix, iy) crealf(lv->xc_q[(size_t)(((iy) + H) % H) * W + (((ix) + W) % W)])
+    double fx = bx + parabolic(XC(bx - 1, by), XC(bx, by), XC(bx + 1, by));
+    double fy = by + parabolic(XC(bx, by - 1), XC(bx, by), XC(bx, by + 1));
+#undef XC
+    if (fx > W / 2) fx -= W;
+    if (fy > H / 2) fy -= H;
+    *sx = fx * lv->grid.dx;
+    *sy = fy * lv->grid.dy;
+    return SASNAV_OK;
+}

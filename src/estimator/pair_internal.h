@@ -3,6 +3,8 @@
 #define SASNAV_PAIR_INTERNAL_H
 
 #include <stddef.h>
+#include <complex.h>
+#include <fftw3.h>
 
 #include "sasnav/error.h"
 #include "sasnav/estimator.h"
@@ -17,6 +19,10 @@ typedef struct {
     sasnav_cfloat *rho_p, *rho_q, *psi_p, *psi_q, *tmp, *data_tmp, *cgls_work;
     double *mod_p, *mod_q, *blur_tmp;
     double rho_p_norm;
+    /* 2-D cross-correlation of |rho_p| and |rho_q| (global stage). */
+    int xc_nx, xc_ny;
+    fftwf_complex *xc_p, *xc_q;
+    fftwf_plan xc_fwd_p, xc_fwd_q, xc_inv;
 } pair_level;
 
 struct sasnav_pair {
@@ -33,5 +39,10 @@ struct sasnav_pair {
     long applications;
     int evaluations;
 };
+
+/* Shift (m, along track and range) of the scene content in q's image at
+ * the hypothesised error relative to p's image, from the peak of the
+ * cross-correlation of their moduli at `level`. */
+int pair_image_shift(sasnav_pair *pr, int level, sasnav_pose error, double *sx, double *sy);
 
 #endif

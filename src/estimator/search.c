@@ -81,93 +81,73 @@ static int local_stage(stage_ctx *c, sasnav_pose start, sasnav_pose step, double
     return res == NLOPT_MAXEVAL_REACHED ? SASNAV_ERR_NOT_CONVERGED : SASNAV_OK;
 }
 
-/* Grid point (surge index, yaw index) of the global stage's 2-D scan. */
-typedef struct {
-    sasnav_pose e;
-    double f;
-} candidate;
+/* Global stage (docs/estimator.md). The moduli of p's and q's images are
+ * alike up to a shift of the scene content: a cross-correlation at the
+ * prior measures it, and for any candidate yaw the shift fixes the
+ * translation exactly (the image of q's data made with pose Q_h shows a
+ * scene point z at Q_h Q_t^-1 z, Q_t the true pose). This leaves a 1-D
+ * family ("valley": surge ~ -R yaw) that zeta scans; then the best point is
+ * refined locally. */
+static sasnav_pose valley_point(const sasnav_pair *pr, sasnav_pose hyp_disp, double zx, double zy,
+                                double sx, double sy, double theta_t)
+{
+    const sasnav_pose nominal = pr->nominal;
+    double wx, wy;
+    sasnav_pose_apply(sasnav_pose_inverse(hyp_disp), zx + sx, zy + sy, &wx, &wy);
+    double c = cos(theta_t), s = sin(theta_t);
+    sasnav_pose disp = {zx - (c * wx - s * wy), zy - (s * wx + c * wy), theta_t};
+    sasnav_pose e = {disp.x - nominal.x, disp.y - nominal.y, disp.theta - nominal.theta};
+    return e;
+}
 
-#define MAX_CANDIDATES 3
-
-static int global_stage(sasnav_pair *pr, sasnav_pose *best, int *evals)
+static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, int *evals)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
-    sasnav_pose c = o->prior, s = o->grid_step, b = o->box;
-    int nx = s.x > 0 ? (int)floor(b.x / s.x + 1e-9) : 0;
-    int ny = s.y > 0 ? (int)floor(b.y / s.y + 1e-9) : 0;
-    int nt = s.theta > 0 ? (int)floor(b.theta / s.theta + 1e-9) : 0;
-    int wx = 2 * nx + 1, wt = 2 * nt + 1;
-    double *f = malloc(sizeof(double) * wx * wt);
-    if (!f) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-    int n = 0, rc = SASNAV_OK;
-    /* 1. Scan (surge, yaw) at the prior sway: the blurred zeta (blur along
-     *    range only) is smooth along sway but keeps the cross-range detail
-     *    that separates the true yaw from its grating-lobe ambiguity. */
-    for (int ix = -nx; ix <= nx && !rc; ix++)
-        for (int it = -nt; it <= nt && !rc; it++) {
-            sasnav_pose e = {c.x + ix * s.x, c.y, c.theta + it * s.theta};
-            rc = sasnav_pair_eval(pr, e, 0, 1, &f[(ix + nx) * wt + it + nt], NULL, NULL);
-            n++;
-        }
-    /* 2. Keep the lowest few local minima of the scan. */
-    candidate cand[MAX_CANDIDATES];
-    int nc = 0;
-    for (int ix = 0; ix < wx && !rc; ix++)
-        for (int it = 0; it < wt; it++) {
-            double v = f[ix * wt + it];
-            int is_min = 1;
-            for (int dx = -1; dx <= 1; dx++)
-                for (int dt = -1; dt <= 1; dt++) {
-                    int jx = ix + dx, jt = it + dt;
-                    if ((dx || dt) && jx >= 0 && jx < wx && jt >= 0 && jt < wt && f[jx * wt + jt] < v)
-                        is_min = 0;
-                }
-            if (!is_min) continue;
-            candidate cd = {{c.x + (ix - nx) * s.x, c.y, c.theta + (it - nt) * s.theta}, v};
-            int pos = nc < MAX_CANDIDATES ? nc : MAX_CANDIDATES;
-            while (pos > 0 && cand[pos - 1].f > v) {
-                if (pos < MAX_CANDIDATES) cand[pos] = cand[pos - 1];
-                pos--;
-            }
-            if (pos < MAX_CANDIDATES) {
-                cand[pos] = cd;
-                if (nc < MAX_CANDIDATES) nc++;
-            }
-        }
-    free(f);
-    if (rc) return rc;
-    /* 3. For each candidate: scan sway, refine the blurred zeta locally,
-     *    then rank by the plain (unblurred) zeta. */
-    double best_plain = HUGE_VAL;
-    for (int k = 0; k < nc; k++) {
-        sasnav_pose e = cand[k].e, arg = e;
-        double fbest = cand[k].f;
-        for (int iy = -ny; iy <= ny; iy++) {
-            if (iy == 0) continue;
-            e.y = c.y + iy * s.y;
-            double z;
-            if ((rc = sasnav_pair_eval(pr, e, 0, 1, &z, NULL, NULL))) return rc;
-            n++;
-            if (z < fbest) {
-                fbest = z;
-                arg = e;
-            }
-        }
-        stage_ctx ctx = {.pr = pr, .level = 0, .blurred = 1};
-        sasnav_pose refined;
-        double fr;
-        rc = local_stage(&ctx, arg, s, 1.5, 0.02, o->max_evaluations, &refined, &fr);
-        n += ctx.evals;
-        if (rc && rc != SASNAV_ERR_NOT_CONVERGED) return rc;
-        if (!(fr < fbest)) refined = arg;
-        double plain;
-        if ((rc = sasnav_pair_eval(pr, refined, 0, 0, &plain, NULL, NULL))) return rc;
+    const pair_level *lv = &pr->level[0];
+    sasnav_pose c = o->prior, b = o->box;
+    double zx = lv->grid.x0 + 0.5 * (lv->grid.nx - 1) * lv->grid.dx;
+    double zy = lv->grid.y0 + 0.5 * (lv->grid.ny - 1) * lv->grid.dy;
+    int n = 0, rc;
+    sasnav_pose hyp = c;
+    double sx = 0, sy = 0;
+    /* Two correlation passes: the second, at the first pass's point of the
+     * valley with the prior yaw, removes most of the distortion of the
+     * first image. */
+    for (int pass = 0; pass < 2; pass++) {
+        if ((rc = pair_image_shift(pr, 0, hyp, &sx, &sy))) return rc;
+        sasnav_pose hd = {pr->nominal.x + hyp.x, pr->nominal.y + hyp.y, pr->nominal.theta + hyp.theta};
+        hyp = valley_point(pr, hd, zx, zy, sx, sy, pr->nominal.theta + c.theta);
+        if (fabs(hyp.x - c.x) > b.x || fabs(hyp.y - c.y) > b.y) hyp = c;
+    }
+    sasnav_pose hd = {pr->nominal.x + hyp.x, pr->nominal.y + hyp.y, pr->nominal.theta + hyp.theta};
+    if ((rc = pair_image_shift(pr, 0, hyp, &sx, &sy))) return rc;
+    /* Scan the valley in yaw steps that move the scene by one phase-centre
+     * spacing at the grid's range. */
+    double step = pc_spacing / o->range;
+    int nt = (int)ceil(b.theta / step);
+    double fbest = HUGE_VAL;
+    sasnav_pose arg = hyp;
+    for (int it = -nt; it <= nt; it++) {
+        double theta_t = pr->nominal.theta + c.theta + it * b.theta / nt;
+        sasnav_pose e = valley_point(pr, hd, zx, zy, sx, sy, theta_t);
+        if (fabs(e.x - c.x) > b.x || fabs(e.y - c.y) > b.y) continue;
+        double z;
+        if ((rc = sasnav_pair_eval(pr, e, 0, 0, &z, NULL, NULL))) return rc;
         n++;
-        if (plain < best_plain) {
-            best_plain = plain;
-            *best = refined;
+        if (z < fbest) {
+            fbest = z;
+            arg = e;
         }
     }
+    /* Local refinement of zeta at level 0 around the best valley point. */
+    stage_ctx ctx = {.pr = pr, .level = 0};
+    sasnav_pose unit = {pc_spacing, pc_spacing, pc_spacing / o->range};
+    sasnav_pose refined;
+    double fr;
+    rc = local_stage(&ctx, arg, unit, 2.0, 0.02, o->max_evaluations, &refined, &fr);
+    n += ctx.evals;
+    if (rc && rc != SASNAV_ERR_NOT_CONVERGED) return rc;
+    *best = fr < fbest ? refined : arg;
     *evals = n;
     return SASNAV_OK;
 }
@@ -206,7 +186,7 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     sasnav_pose start = o->prior;
     int nglob = 0;
     if (o->global_stage) {
-        rc = global_stage(pr, &start, &nglob);
+        rc = global_stage(pr, pc_spacing, &start, &nglob);
         if (rc) return rc;
     }
     res->global_stage = start;

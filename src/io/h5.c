@@ -279,7 +279,7 @@ int sasnav_run_read(const char *path, sasnav_run **run)
     if (!path) return sasnav_set_error(SASNAV_ERR_ARG, "run file path is NULL");
     h5_ctx c;
     h5_begin(&c, path);
-    int rc = h5_open_read(&c, RUN_FORMATS, 1, NULL, 0);
+    int rc = h5_open_read(&c, RUN_FORMATS, 1);
     if (!rc) rc = run_read_open(&c, run);
     h5_end(&c);
     return rc;
@@ -335,7 +335,7 @@ int sasnav_nav_read(const char *path, int *n_pings, sasnav_ping_pose **nav, sasn
         return sasnav_set_error(SASNAV_ERR_ARG, "navigation read needs a path and output pointers");
     h5_ctx c;
     h5_begin(&c, path);
-    int rc = h5_open_read(&c, NAV_FORMATS, 2, NULL, 0);
+    int rc = h5_open_read(&c, NAV_FORMATS, 2);
     if (!rc) rc = nav_read_open(&c, n_pings, nav, truth);
     h5_end(&c);
     return rc;
@@ -454,7 +454,7 @@ int sasnav_image_read(const char *path, sasnav_grid *grid, sasnav_cfloat **image
         return sasnav_set_error(SASNAV_ERR_ARG, "image read needs a path, a grid and an image pointer");
     h5_ctx c;
     h5_begin(&c, path);
-    int rc = h5_open_read(&c, IMAGE_FORMATS, 1, NULL, 0);
+    int rc = h5_open_read(&c, IMAGE_FORMATS, 1);
     if (!rc) rc = image_read_open(&c, grid, image);
     h5_end(&c);
     return rc;

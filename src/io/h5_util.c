@@ -158,8 +158,7 @@ static int is_hdf5(const char *path)
 #endif
 }
 
-int h5_open_read(h5_ctx *c, const char *const *formats, int n_formats, char *found,
-                 size_t found_size)
+int h5_open_read(h5_ctx *c, const char *const *formats, int n_formats)
 {
     struct stat st;
     if (stat(c->path, &st) != 0) return h5_fail(c, SASNAV_ERR_IO, "cannot open: %s", strerror(errno));
@@ -198,7 +197,6 @@ int h5_open_read(h5_ctx *c, const char *const *formats, int n_formats, char *fou
     if (version != SASNAV_H5_FORMAT_VERSION)
         return h5_fail(c, SASNAV_ERR_FORMAT, "format_version %d is not supported (this library reads %d)",
                        version, SASNAV_H5_FORMAT_VERSION);
-    if (found) snprintf(found, found_size, "%s", format);
     return SASNAV_OK;
 }
 
@@ -390,45 +388,6 @@ static int type_check(h5_ctx *c, const char *name, int kind, hid_t type)
     return SASNAV_OK;
 }
 
-int h5_open_dataset(h5_ctx *c, const char *name, int kind, int rank, hsize_t *dims, hid_t *dset)
-{
-    *dset = H5I_INVALID_HID;
-    if (!h5_exists(c, name)) return h5_fail(c, SASNAV_ERR_FORMAT, "missing dataset %s", name);
-    hid_t d = H5Dopen2(c->file, name, H5P_DEFAULT);
-    if (d < 0) return h5_fail_lib(c, SASNAV_ERR_FORMAT, "%s is not a readable dataset", name);
-    hid_t type = H5Dget_type(d);
-    int rc = type < 0 ? h5_fail_lib(c, SASNAV_ERR_FORMAT, "%s has no readable type", name)
-                      : type_check(c, name, kind, type);
-    close_id(&type, H5Tclose);
-    if (rc) {
-        H5Dclose(d);
-        return rc;
-    }
-    hid_t space = H5Dget_space(d);
-    if (space < 0 || H5Sget_simple_extent_type(space) != H5S_SIMPLE) {
-        rc = h5_fail_lib(c, SASNAV_ERR_FORMAT, "%s is not a simple array", name);
-    } else {
-        int nd = H5Sget_simple_extent_ndims(space);
-        if (nd != rank) {
-            rc = h5_fail(c, SASNAV_ERR_FORMAT, "%s has rank %d, expected %d", name, nd, rank);
-        } else if (H5Sget_simple_extent_dims(space, dims, NULL) < 0) {
-            rc = h5_fail_lib(c, SASNAV_ERR_FORMAT, "cannot read the shape of %s", name);
-        } else {
-            for (int k = 0; k < rank && !rc; k++)
-                if (dims[k] < 1 || dims[k] > INT32_MAX)
-                    rc = h5_fail(c, SASNAV_ERR_FORMAT, "%s has dimension %d of size %llu", name, k,
-                                 (unsigned long long)dims[k]);
-        }
-    }
-    close_id(&space, H5Sclose);
-    if (rc) {
-        H5Dclose(d);
-        return rc;
-    }
-    *dset = d;
-    return SASNAV_OK;
-}
-
 /* Checks the storage of a dataset: no external files or virtual layout, and
  * as many bytes stored as its shape needs (allowing for compression). */
 static int storage_check(h5_ctx *c, hid_t dset, const char *name)
@@ -472,10 +431,50 @@ done:
     return rc;
 }
 
+int h5_open_dataset(h5_ctx *c, const char *name, int kind, int rank, hsize_t *dims, hid_t *dset)
+{
+    *dset = H5I_INVALID_HID;
+    if (!h5_exists(c, name)) return h5_fail(c, SASNAV_ERR_FORMAT, "missing dataset %s", name);
+    hid_t d = H5Dopen2(c->file, name, H5P_DEFAULT);
+    if (d < 0) return h5_fail_lib(c, SASNAV_ERR_FORMAT, "%s is not a readable dataset", name);
+    hid_t type = H5Dget_type(d);
+    int rc = type < 0 ? h5_fail_lib(c, SASNAV_ERR_FORMAT, "%s has no readable type", name)
+                      : type_check(c, name, kind, type);
+    close_id(&type, H5Tclose);
+    if (rc) {
+        H5Dclose(d);
+        return rc;
+    }
+    hid_t space = H5Dget_space(d);
+    if (space < 0 || H5Sget_simple_extent_type(space) != H5S_SIMPLE) {
+        rc = h5_fail_lib(c, SASNAV_ERR_FORMAT, "%s is not a simple array", name);
+    } else {
+        int nd = H5Sget_simple_extent_ndims(space);
+        if (nd != rank) {
+            rc = h5_fail(c, SASNAV_ERR_FORMAT, "%s has rank %d, expected %d", name, nd, rank);
+        } else if (H5Sget_simple_extent_dims(space, dims, NULL) < 0) {
+            rc = h5_fail_lib(c, SASNAV_ERR_FORMAT, "cannot read the shape of %s", name);
+        } else {
+            for (int k = 0; k < rank && !rc; k++)
+                if (dims[k] < 1 || dims[k] > INT32_MAX)
+                    rc = h5_fail(c, SASNAV_ERR_FORMAT, "%s has dimension %d of size %llu", name, k,
+                                 (unsigned long long)dims[k]);
+        }
+    }
+    close_id(&space, H5Sclose);
+    /* Before anyone allocates memory for the shape it claims. */
+    if (!rc) rc = storage_check(c, d, name);
+    if (rc) {
+        H5Dclose(d);
+        return rc;
+    }
+    *dset = d;
+    return SASNAV_OK;
+}
+
 int h5_read_dataset(h5_ctx *c, hid_t dset, const char *name, int kind, void *buf)
 {
-    int rc = storage_check(c, dset, name);
-    if (rc) return rc;
+    int rc = SASNAV_OK;
     hid_t mem = kind_type(kind, 0);
     if (mem < 0) return h5_fail_lib(c, SASNAV_ERR_INTERNAL, "cannot build the memory type of %s", name);
     if (H5Dread(dset, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0)

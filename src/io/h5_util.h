@@ -49,10 +49,9 @@ int h5_reframe(h5_ctx *c, int status, const char *where);
 
 /* Opens c->path read-only: SASNAV_ERR_IO if the file is missing, a directory
  * or unreadable, SASNAV_ERR_FORMAT if it is not (a valid) HDF5 file. Then
- * checks the root attributes `format` (one of the n accepted names, stored in
- * found if not NULL) and `format_version`. */
-int h5_open_read(h5_ctx *c, const char *const *formats, int n_formats, char *found,
-                 size_t found_size);
+ * checks the root attributes `format` (one of the n accepted names) and
+ * `format_version`. */
+int h5_open_read(h5_ctx *c, const char *const *formats, int n_formats);
 
 /* 1 if the object `name` (absolute path) exists, checking each component. */
 int h5_exists(h5_ctx *c, const char *name);
@@ -73,10 +72,11 @@ int h5_read_attr_string(h5_ctx *c, const char *obj, const char *name, char *buf,
 enum { H5_REAL = 0, H5_COMPLEX = 1 };
 
 /* Opens dataset `name`, checks its kind and rank, returns its dims (each in
- * 1..INT_MAX). */
+ * 1..INT_MAX), and checks that the file stores as much data as they need
+ * (so that callers may allocate for them). */
 int h5_open_dataset(h5_ctx *c, const char *name, int kind, int rank, hsize_t *dims, hid_t *dset);
 /* Reads the whole dataset (opened by h5_open_dataset) into buf (double or
- * sasnav_cfloat) after checking that the file really stores that much data. */
+ * sasnav_cfloat). */
 int h5_read_dataset(h5_ctx *c, hid_t dset, const char *name, int kind, void *buf);
 /* Convenience: open, check dims equal `dims`, read, close. */
 int h5_read_dataset_dims(h5_ctx *c, const char *name, int kind, int rank, const hsize_t *dims,
