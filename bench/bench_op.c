@@ -1,8 +1,9 @@
 /* Throughput of the ping operator on the paper-pair geometry (16 Rx, 10 m).
  *
- *   bench_op [tolerance]        (default 1e-6)
+ *   bench_op [tolerance [nx ny]]     (default 1e-6; 80 x 128 and 256 x 256)
  *
- * For an 80 x 128 grid and a 256 x 256 grid at 1.25 cm, with 1 and 2 threads:
+ * For an 80 x 128 grid and a 256 x 256 grid at 1.25 cm (or nx x ny), with 1
+ * and 2 threads:
  * the time of set_geometry, forward and adjoint, and the throughput in
  * (pixel x channel) updates per second; then the peak resident memory
  * (getrusage ru_maxrss). Times are the best of 40 batches, each batch as many
@@ -129,11 +130,21 @@ int main(int argc, char **argv)
 {
     double tol = argc > 1 ? atof(argv[1]) : 1e-6;
     if (!(tol > 0.0 && tol < 1.0)) {
-        fprintf(stderr, "usage: bench_op [tolerance in (0, 1)]\n");
+        fprintf(stderr, "usage: bench_op [tolerance [nx ny]]\n");
         return 2;
     }
-    int rc = bench_grid(80, 128, 0.0125, tol);
-    if (!rc) rc = bench_grid(256, 256, 0.0125, tol);
+    int rc;
+    if (argc > 3) {
+        int nx = atoi(argv[2]), ny = atoi(argv[3]);
+        if (nx < 1 || ny < 1 || nx > 4096 || ny > 4096) {
+            fprintf(stderr, "usage: bench_op [tolerance [nx ny]]\n");
+            return 2;
+        }
+        rc = bench_grid(nx, ny, 0.0125, tol);
+    } else {
+        rc = bench_grid(80, 128, 0.0125, tol);
+        if (!rc) rc = bench_grid(256, 256, 0.0125, tol);
+    }
     if (rc) {
         fprintf(stderr, "bench_op: %s: %s\n", sasnav_strerror(rc), sasnav_last_error());
         return 1;

@@ -1,7 +1,8 @@
 /* Accuracy and cost of the ping-pair estimator on paper-pair variants.
  *
  * usage: bench_pair [--draws N] [--seed S] [--snr DB|inf] [--threads T]
- *                   [--k K] [--i I] [--paper-only]
+ *                   [--k K] [--i I] [--cross M] [--error-extent M]
+ *                   [--error-taper M] [--paper-only]
  * Prints, for the paper's case and N random motion errors drawn uniformly
  * in surge +-4 cm, sway +-2.5 cm, yaw +-4e-2 rad (seeded): the truth, the
  * zeta-stage and final estimates, their errors, evaluations, operator
@@ -67,6 +68,9 @@ int main(int argc, char **argv)
         } else if (!strcmp(argv[a], "--threads") && a + 1 < argc) po.nthreads = atoi(argv[++a]);
         else if (!strcmp(argv[a], "--k") && a + 1 < argc) po.k = atoi(argv[++a]);
         else if (!strcmp(argv[a], "--i") && a + 1 < argc) po.i = atoi(argv[++a]);
+        else if (!strcmp(argv[a], "--cross") && a + 1 < argc) po.cross_extent = atof(argv[++a]);
+        else if (!strcmp(argv[a], "--error-extent") && a + 1 < argc) po.error_extent = atof(argv[++a]);
+        else if (!strcmp(argv[a], "--error-taper") && a + 1 < argc) po.error_taper = atof(argv[++a]);
         else if (!strcmp(argv[a], "--paper-only")) paper_only = 1;
         else {
             fprintf(stderr, "usage: bench_pair [--draws N] [--seed S] [--snr DB|inf] [--threads T] [--k K] [--i I] [--paper-only]\n");
@@ -78,7 +82,9 @@ int main(int argc, char **argv)
     sc.snr_db = snr;
     po.range = sc.range_of_interest;
     po.tx_lag = sc.traj.tx_lag;
-    printf("paper-pair, SNR %g dB, k = %d, i = %d, threads %d\n", snr, po.k, po.i, po.nthreads);
+    printf("paper-pair, SNR %g dB, k = %d, i = %d, threads %d, grid along-track %g m (0 = auto), "
+           "error extent %g m, taper %g m\n", snr, po.k, po.i, po.nthreads, po.cross_extent, po.error_extent,
+           po.error_taper);
     int pass = 0;
     int paper = run_case(&sc, sc.traj.pair_error, &po, 0);
     if (paper < 0) return 1;

@@ -1,6 +1,7 @@
 /* T^H is the adjoint of T (SPEC 5): |<T x, y> - <x, T^H y>| <= 1e-5 ||T x|| ||y||
  * on random x, y, for the paper-pair geometry and a rotated bistatic 3-D one,
- * for every stored tap count; results independent of the thread count; the
+ * for every stored tap count and both adjoint loop orders (small and large
+ * grids); results independent of the thread count; the
  * accumulating adjoint; and the operator's input checks.
  *
  * Why 1e-5: in exact arithmetic the two inner products are equal (T^H applies
@@ -92,6 +93,18 @@ static void paper_pair(setup *s)
     s->ping = sasnav_ping_place(centroid, &local);
     sasnav_window_for_ranges(&s->sys, 9.6, 10.4, 8, &s->win);
     make_points(s, 40, 48, 0.0125, 0.0, 10.0, 0.0, 5);
+}
+
+/* A grid large enough (160 x 160 points x 16 channels, 18 MB of pair data)
+ * for the operator to use its streaming adjoint loop (op.c, STREAM_BYTES). */
+static void paper_pair_large(setup *s)
+{
+    paper_pair(s);
+    free(s->x);
+    free(s->y);
+    s->name = "paper pair 160^2";
+    sasnav_window_for_ranges(&s->sys, 8.9, 11.2, 8, &s->win);
+    make_points(s, 160, 160, 0.0125, 0.0, 10.0, 0.0, 0);
 }
 
 /* Rotated bistatic geometry: array yaw 0.3, Tx yaw 0.22 and displaced
@@ -278,10 +291,11 @@ static void check_bad_inputs(void)
 
 int main(void)
 {
-    setup s[2];
+    setup s[3];
     memset(s, 0, sizeof s);
     paper_pair(&s[0]);
     rotated_bistatic(&s[1]);
+    paper_pair_large(&s[2]);
     /* Tolerances covering every stored tap count (4, 8, 12, 16) and three
      * oversampling factors. */
     static const double tols[4] = {1e-3, 1e-6, 1e-9, 1e-12};
@@ -291,8 +305,10 @@ int main(void)
         check_adjoint(&s[k], 1e-4, 3.0);
         check_threads(&s[k]);
     }
+    check_adjoint(&s[2], 1e-6, 2.0);
+    check_adjoint(&s[2], 1e-9, 2.0);
+    check_threads(&s[2]);
     check_bad_inputs();
-    free_setup(&s[0]);
-    free_setup(&s[1]);
+    for (int k = 0; k < 3; k++) free_setup(&s[k]);
     return test_summary("test_op_adjoint");
 }

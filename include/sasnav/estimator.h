@@ -64,6 +64,9 @@ typedef struct {
                               spacing, i.e. 0.045 rad in paper-pair) */
     sasnav_pose grid_step; /* steps of the global grid (default 0.01 m, 0.01 m, 0.01 rad) */
     int global_stage;      /* 1 (default): run the global stage; 0: local only */
+    double error_extent;   /* m, along-track extent over which zeta and eta
+                              compare the projections (0 = the whole grid) */
+    double error_taper;    /* m, raised-cosine taper beyond it on each side */
     double min_overlap;    /* minimum ||psi|| / ||rho|| before "no overlap" (1e-3) */
     int max_evaluations;   /* per local stage (default 400) */
     int nthreads;          /* OpenMP threads for the operators (0 = default) */

@@ -28,6 +28,8 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->coarse_pixel = 0.0;
     o->blur = 0.075;
     o->blur_cross = 0.0;
+    o->error_extent = 0.0;
+    o->error_taper = 0.0;
     o->box = (sasnav_pose){0.06, 0.035, 0.0};
     o->grid_step = (sasnav_pose){0.01, 0.01, 0.01};
     o->global_stage = 1;
@@ -61,6 +63,7 @@ static void level_free(pair_level *lv)
     free(lv->mod_p);
     free(lv->mod_q);
     free(lv->blur_tmp);
+    free(lv->window);
     if (lv->xc_fwd_p) fftwf_destroy_plan(lv->xc_fwd_p);
     if (lv->xc_fwd_q) fftwf_destroy_plan(lv->xc_fwd_q);
     if (lv->xc_inv) fftwf_destroy_plan(lv->xc_inv);
@@ -98,8 +101,9 @@ static int level_init(sasnav_pair *pr, pair_level *lv, double pixel, int k, int 
     lv->mod_p = malloc(sizeof(double) * np);
     lv->mod_q = malloc(sizeof(double) * np);
     lv->blur_tmp = malloc(sizeof(double) * np);
+    lv->window = malloc(sizeof(float) * np);
     if (!lv->rho_p || !lv->rho_q || !lv->psi_p || !lv->psi_q || !lv->tmp || !lv->data_tmp ||
-        !lv->cgls_work || !lv->mod_p || !lv->mod_q || !lv->blur_tmp)
+        !lv->cgls_work || !lv->mod_p || !lv->mod_q || !lv->blur_tmp || !lv->window)
         return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for the estimator");
     /* Correlation buffers zero-padded to twice the grid (linear, not
      * circular, correlation); plans made once here. */
@@ -132,6 +136,13 @@ static int level_make_ops(sasnav_pair *pr, pair_level *lv, double xcentre)
     }
     sasnav_pose id = {0, 0, 0};
     sasnav_grid_points(&lv->grid, id, x, y);
+    /* Flat over the central error_extent along track, raised-cosine tapers
+     * of error_taper on both sides, zero beyond. */
+    double half = 0.5 * pr->opts.error_extent, taper = pr->opts.error_taper;
+    for (size_t j = 0; j < lv->np; j++) {
+        double u = fabs(x[j] - xcentre) - half;
+        lv->window[j] = u <= 0 ? 1.0f : u >= taper ? 0.0f : (float)(0.5 + 0.5 * cos(M_PI * u / taper));
+    }
     sasnav_op_opts oo = pr->opts.op;
     oo.nthreads = pr->opts.nthreads;
     int rc = sasnav_op_create(&pr->sys, &pr->array, &pr->win, (int)lv->np, x, y, &oo, &lv->op_p);
@@ -194,6 +205,8 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
         if (o->cross_extent < 0.5) o->cross_extent = 0.5;
         if (o->cross_extent > 4.0) o->cross_extent = 4.0;
     }
+    if (!(o->error_extent > 0)) o->error_extent = o->cross_extent;
+    if (o->error_taper < 0) o->error_taper = 0;
     if (!(o->box.theta > 0)) {
         /* Yaw is unambiguous within +-lambda / (4 d) of the truth, d the
          * phase-centre spacing (a grating lobe of the phase-centre sampling
@@ -280,6 +293,17 @@ static int project(sasnav_pair *pr, pair_level *lv, sasnav_op *op, const sasnav_
     return rc;
 }
 
+/* x <- (Q_b Q_a)^i x by alternating projections. */
+static int intersect(sasnav_pair *pr, pair_level *lv, sasnav_op *a, sasnav_op *b, sasnav_cfloat *x)
+{
+    int rc = SASNAV_OK;
+    for (int it = 0; it < lv->i && !rc; it++) {
+        rc = project(pr, lv, a, x, lv->tmp);
+        if (!rc) rc = project(pr, lv, b, lv->tmp, x);
+    }
+    return rc;
+}
+
 /* Separable Gaussian blur of a real map (sigmas in metres along track and
  * in range; 0 = no blur along that axis), zero outside. */
 static void blur_map(const sasnav_grid *g, double sigma_x, double sigma_y, double *f, double *tmp)
@@ -335,20 +359,20 @@ int sasnav_pair_eval(sasnav_pair *pr, sasnav_pose error, int level, int blurred,
     rc = sasnav_cgls(lv->op_q, pr->data_q, &co, lv->rho_q, lv->cgls_work);
     pr->applications += 1 + 2L * lv->k;
     if (rc) return rc;
-    /* psi_p = (Q_p Q_q)^i rho_p */
+    /* psi_p = (Q_p Q_q)^i rho_p and psi_q = (Q_q Q_p)^i rho_q */
     memcpy(lv->psi_p, lv->rho_p, sizeof(sasnav_cfloat) * np);
-    for (int it = 0; it < lv->i && !rc; it++) {
-        rc = project(pr, lv, lv->op_q, lv->psi_p, lv->tmp);
-        if (!rc) rc = project(pr, lv, lv->op_p, lv->tmp, lv->psi_p);
-    }
-    /* psi_q = (Q_q Q_p)^i rho_q */
+    rc = intersect(pr, lv, lv->op_q, lv->op_p, lv->psi_p);
     memcpy(lv->psi_q, lv->rho_q, sizeof(sasnav_cfloat) * np);
-    for (int it = 0; it < lv->i && !rc; it++) {
-        rc = project(pr, lv, lv->op_p, lv->psi_q, lv->tmp);
-        if (!rc) rc = project(pr, lv, lv->op_q, lv->tmp, lv->psi_q);
-    }
+    if (!rc) rc = intersect(pr, lv, lv->op_p, lv->op_q, lv->psi_q);
     if (rc) return rc;
     pr->evaluations++;
+    /* Error window: the operators' grid is wider than the compared region
+     * (echoes from outside a grid fold onto its edges, differently for p and
+     * q); psi is weighted by the window before any norm. */
+    for (size_t j = 0; j < np; j++) {
+        lv->psi_p[j] *= lv->window[j];
+        lv->psi_q[j] *= lv->window[j];
+    }
     double np_ = nrm2(lv->psi_p, np), nq_ = nrm2(lv->psi_q, np);
     if (overlap) *overlap = np_ / lv->rho_p_norm;
     double nrm = 1.0;

@@ -18,6 +18,7 @@ typedef struct {
     sasnav_op *op_p, *op_q;
     sasnav_cfloat *rho_p, *rho_q, *psi_p, *psi_q, *tmp, *data_tmp, *cgls_work;
     double *mod_p, *mod_q, *blur_tmp;
+    float *window;
     double rho_p_norm;
     /* 2-D cross-correlation of |rho_p| and |rho_q| (global stage). */
     int xc_nx, xc_ny;
