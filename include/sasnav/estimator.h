@@ -47,9 +47,10 @@ typedef struct {
     double tx_lag;         /* m, EPCA Tx-array offset (default 0.10) */
     double range;          /* m, centre range of the estimation grid (default 10) */
     double range_extent;   /* m, range extent of the grid (default 1.6) */
-    double cross_extent;   /* m, along-track extent of the grid (default 0: the
-                              element beam's footprint between first nulls at
-                              the grid's range, 2 R lambda / D, 2 m in paper-pair) */
+    double cross_extent;   /* m, along-track extent of the grid (default 0: 80 %
+                              of the element beam's footprint between first
+                              nulls at the grid's range, 1.6 R lambda / D,
+                              1.6 m in paper-pair) */
     double pixel;          /* m, pixel size (default: min(D/4, c/(4B))) */
     double coarse_pixel;   /* m, pixel of the global stage (default 2 * pixel) */
     double blur;           /* m, range sigma of the Gaussian blur of the global
