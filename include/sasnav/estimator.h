@@ -68,7 +68,9 @@ typedef struct {
     double error_extent;   /* m, along-track extent over which zeta and eta
                               compare the projections (0 = the whole grid) */
     double error_taper;    /* m, raised-cosine taper beyond it on each side */
-    double min_overlap;    /* minimum ||psi|| / ||rho|| before "no overlap" (1e-3) */
+    double min_overlap;    /* minimum ||psi_p|| / ||rho_p|| at full pixels before
+                              "no overlap" (default 1e-2; ~0.5 at nominal
+                              paper-pair, < 1e-3 once no phase centres overlap) */
     int max_evaluations;   /* per local stage (default 400) */
     int nthreads;          /* OpenMP threads for the operators (0 = default) */
     sasnav_op_opts op;     /* operator options */

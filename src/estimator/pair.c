@@ -33,7 +33,7 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->box = (sasnav_pose){0.06, 0.035, 0.0};
     o->grid_step = (sasnav_pose){0.01, 0.01, 0.01};
     o->global_stage = 1;
-    o->min_overlap = 1e-3;
+    o->min_overlap = 1e-2;
     o->max_evaluations = 400;
     o->nthreads = 0;
     sasnav_op_default_opts(&o->op);

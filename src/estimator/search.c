@@ -173,7 +173,10 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
 
     /* Overlap check at the prior. */
     double ov = 0;
-    int rc = sasnav_pair_eval(pr, o->prior, 0, 0, NULL, NULL, &ov);
+    /* Level 1 (full pixels): at coarse pixels truncated CGLS rescales the
+     * faint sidelobe-lit part of a grid and the kept energy stays high even
+     * for pings metres apart. */
+    int rc = sasnav_pair_eval(pr, o->prior, 1, 0, NULL, NULL, &ov);
     if (rc) return rc;
     if (!(ov >= o->min_overlap)) {
         res->status = SASNAV_ERR_NO_OVERLAP;
