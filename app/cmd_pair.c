@@ -14,7 +14,7 @@
 static const char *help =
     "usage: sasnav pair run.h5 [--p I --q J] [--json] [--k K] [--i I]\n"
     "                   [--prior S,W,Y] [--no-global] [--subintervals N]\n"
-    "                   [--range R] [--threads N]\n"
+    "                   [--range R] [--lag-model fixed|motion] [--threads N]\n"
     "\n"
     "Estimates the motion error (displacement minus nominal) of ping q relative\n"
     "to ping p: surge and sway in metres, yaw in radians. Without --p/--q the\n"
@@ -30,6 +30,9 @@ static const char *help =
     "                    range of interest)\n"
     "  --subintervals N  split the swath into N range sub-intervals, each with\n"
     "                    its own EPCA offset and estimate (paper III-B)\n"
+    "  --lag-model M     Tx-array offset per sub-interval: 'fixed' (the run's\n"
+    "                    tx_lag, default) or 'motion' (speed x 2 R / c at the\n"
+    "                    sub-interval's centre range R)\n"
     "  --threads N       OpenMP threads\n";
 
 typedef struct {
@@ -57,9 +60,10 @@ int cmd_pair(int argc, char **argv)
         {"i", required_argument, 0, 'i'},     {"prior", required_argument, 0, 'r'},
         {"no-global", no_argument, 0, 'G'},   {"subintervals", required_argument, 0, 'S'},
         {"range", required_argument, 0, 'R'}, {"threads", required_argument, 0, 't'},
+        {"lag-model", required_argument, 0, 'L'},
         {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
     long p = 0, q = 1, k = 5, iters = 5, nsub = 1, threads = 0;
-    int json = 0, no_global = 0, have_p = 0, have_q = 0;
+    int json = 0, no_global = 0, have_p = 0, have_q = 0, motion_lag = 0;
     double prior[3] = {0, 0, 0}, range = NAN;
     int opt;
     optind = 1;
@@ -75,6 +79,10 @@ int cmd_pair(int argc, char **argv)
         case 'S': if (cli_parse_int(optarg, 1, 64, &nsub)) return cli_fail("pair", 0, "--subintervals needs 1..64"); break;
         case 'R': if (cli_parse_double(optarg, &range) || !(range > 0)) return cli_fail("pair", 0, "--range needs a positive number"); break;
         case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_fail("pair", 0, "--threads needs 0..1024"); break;
+        case 'L':
+            if (!strcmp(optarg, "motion")) motion_lag = 1;
+            else if (strcmp(optarg, "fixed")) return cli_fail("pair", 0, "--lag-model is 'fixed' or 'motion'");
+            break;
         case 'h': fputs(help, stdout); return 0;
         default: fputs(help, stderr); return 2;
         }
@@ -122,10 +130,18 @@ int cmd_pair(int argc, char **argv)
         sasnav_pair_opts so = po;
         so.range_extent = extent / nsub;
         so.range = range - 0.5 * extent + (s + 0.5) * so.range_extent;
-        /* The Tx-array offset is the distance the vehicle covers while the
-         * pulse reaches the sub-interval and returns: proportional to range
-         * when the run's speed is known, else the run's fixed offset. */
+        /* The Tx-array offset: the run's (fixed) one, or the distance the
+         * vehicle covers while the pulse reaches the sub-interval's centre
+         * and returns (--lag-model motion). */
         so.tx_lag = run->tx_lag;
+        if (motion_lag) {
+            if (!(run->speed > 0)) {
+                sasnav_run_free(run);
+                free(out);
+                return cli_fail("pair", 0, "--lag-model motion needs the run's speed (0 in %s)", input);
+            }
+            so.tx_lag = sasnav_motion_tx_lag(run->speed, so.range, run->sys.sound_speed);
+        }
         out[s].range = so.range;
         out[s].tx_lag = so.tx_lag;
         sasnav_pair *pair = NULL;

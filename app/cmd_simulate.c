@@ -63,7 +63,7 @@ int cmd_simulate(int argc, char **argv)
     int rc = sasnav_scenario_preset(preset, &sc);
     if (rc) return cli_fail("simulate", rc, "preset");
     if (config && (rc = sasnav_config_load(config, &sc)))
-        return cli_fail("simulate", rc, "config %s", config);
+        return cli_fail("simulate", rc, "invalid configuration");
     if (seed) {
         long s;
         if (cli_parse_int(seed, 0, 0x7fffffffL, &s))

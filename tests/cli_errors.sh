@@ -1,0 +1,80 @@
+#!/bin/sh
+# The CLI as a user runs it: bad inputs give one clear message on stderr, a
+# non-zero exit status and no output file; good inputs work end to end.
+# usage: sh tests/cli_errors.sh path/to/sasnav
+set -u
+SASNAV=$1
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+
+# expect_fail NAME OUTPUT_PATH COMMAND...: non-zero exit, a message, no output.
+expect_fail() {
+    name=$1; out=$2; shift 2
+    if "$@" >"$T/stdout" 2>"$T/stderr"; then
+        echo "FAIL $name: exit status 0"; fails=$((fails + 1)); return
+    fi
+    if [ ! -s "$T/stderr" ]; then
+        echo "FAIL $name: no error message"; fails=$((fails + 1)); return
+    fi
+    if [ -n "$out" ] && ls "$out"* >/dev/null 2>&1; then
+        echo "FAIL $name: output file left behind"; fails=$((fails + 1)); return
+    fi
+    echo "ok   $name: $(head -n 1 "$T/stderr")"
+}
+
+expect_ok() {
+    name=$1; shift
+    if ! "$@" >"$T/stdout" 2>"$T/stderr"; then
+        echo "FAIL $name: $(cat "$T/stderr")"; fails=$((fails + 1)); return
+    fi
+    echo "ok   $name"
+}
+
+expect_ok "help" "$SASNAV" --help
+expect_ok "simulate --help" "$SASNAV" simulate --help
+expect_ok "image --help" "$SASNAV" image --help
+expect_ok "pair --help" "$SASNAV" pair --help
+expect_fail "unknown command" "" "$SASNAV" frobnicate
+
+# A small noise-free run: the point preset with 3 pings.
+cat >"$T/point3.yaml" <<'YAML'
+preset: point
+trajectory: {n_pings: 3, x_start: -0.2}
+YAML
+expect_ok "simulate point" "$SASNAV" simulate --config "$T/point3.yaml" -o "$T/run.h5"
+expect_ok "image point" "$SASNAV" image "$T/run.h5" --grid -0.1,0.1,41,9.9,10.1,41 -o "$T/img.h5" --png "$T/img.png"
+[ -s "$T/img.png" ] || { echo "FAIL png not written"; fails=$((fails + 1)); }
+
+# Bad configs: NaN, zero elements, a negative range, syntax, missing file.
+printf 'preset: paper-pair\nsystem: {f0: .nan}\n' >"$T/nan.yaml"
+expect_fail "NaN in config" "$T/out1.h5" "$SASNAV" simulate --config "$T/nan.yaml" -o "$T/out1.h5"
+printf 'preset: paper-pair\narray: {n_rx: 0}\n' >"$T/zero.yaml"
+expect_fail "zero elements" "$T/out2.h5" "$SASNAV" simulate --config "$T/zero.yaml" -o "$T/out2.h5"
+printf 'preset: paper-pair\nswath: {range_min: -3}\n' >"$T/neg.yaml"
+expect_fail "negative range" "$T/out3.h5" "$SASNAV" simulate --config "$T/neg.yaml" -o "$T/out3.h5"
+printf 'preset: paper-pair\nsystem: [f0: 3\n' >"$T/syntax.yaml"
+expect_fail "YAML syntax" "$T/out4.h5" "$SASNAV" simulate --config "$T/syntax.yaml" -o "$T/out4.h5"
+expect_fail "missing config" "$T/out5.h5" "$SASNAV" simulate --config "$T/none.yaml" -o "$T/out5.h5"
+expect_fail "unknown preset" "$T/out6.h5" "$SASNAV" simulate --preset nope -o "$T/out6.h5"
+expect_fail "bad --error" "$T/out7.h5" "$SASNAV" simulate --preset paper-pair --error 1,2 -o "$T/out7.h5"
+expect_fail "NaN --snr" "$T/out8.h5" "$SASNAV" simulate --preset paper-pair --snr nan -o "$T/out8.h5"
+
+# Bad run files: missing, not HDF5, truncated, missing dataset.
+expect_fail "missing run" "$T/i1.h5" "$SASNAV" image "$T/nothere.h5" -o "$T/i1.h5"
+echo "not an hdf5 file" >"$T/text.h5"
+expect_fail "not HDF5" "$T/i2.h5" "$SASNAV" image "$T/text.h5" -o "$T/i2.h5"
+size=$(wc -c <"$T/run.h5")
+head -c $((size / 2)) "$T/run.h5" >"$T/trunc.h5"
+expect_fail "truncated run" "$T/i3.h5" "$SASNAV" image "$T/trunc.h5" -o "$T/i3.h5"
+expect_fail "image file as run" "$T/i4.h5" "$SASNAV" image "$T/img.h5" -o "$T/i4.h5"
+expect_fail "bad grid" "$T/i5.h5" "$SASNAV" image "$T/run.h5" --grid 1,0,10,9,10,10 -o "$T/i5.h5"
+expect_fail "output in missing dir" "$T/nodir/i6.h5" "$SASNAV" image "$T/run.h5" -o "$T/nodir/i6.h5"
+
+# Pair estimation refusals: same ping twice, ping out of range.
+expect_fail "pair same ping" "" "$SASNAV" pair "$T/run.h5" --p 1 --q 1
+expect_fail "pair out of range" "" "$SASNAV" pair "$T/run.h5" --p 0 --q 7
+
+ls "$T" | grep -q 'tmp-' && { echo "FAIL temporary files left: $(ls "$T")"; fails=$((fails + 1)); }
+echo "cli_errors: $fails failures"
+[ "$fails" -eq 0 ]
