@@ -11,7 +11,8 @@
 
 static const char *help =
     "usage: sasnav image run.h5 [--nav nav.h5 | --truth] [--grid X0,X1,NX,Y0,Y1,NY]\n"
-    "                    [--png image.png] [--dynamic-range DB] [--threads N] -o image.h5\n"
+    "                    [--png image.png] [--dynamic-range DB] [--threads N]\n"
+    "                    [--ping P [--cgls K] [--tikhonov L]] -o image.h5\n"
     "\n"
     "Backprojects every ping of the run (sum of adjoint ping operators) on a\n"
     "grid and writes the complex image (docs/format.md) and optionally a PNG in dB.\n"
@@ -24,6 +25,10 @@ static const char *help =
     "  --png FILE        also write |image| in dB with axes and a colour bar\n"
     "  --dynamic-range DB  colour scale depth (default 40)\n"
     "  --threads N       OpenMP threads (default: all cores)\n"
+    "  --ping P          image ping P alone (0-based)\n"
+    "  --cgls K          with --ping: the regularised pseudo-inverse of the ping\n"
+    "                    by K CGLS iterations instead of its backprojection\n"
+    "  --tikhonov L      Tikhonov weight of the CGLS inverse (default 0)\n"
     "  -o FILE           output image file (HDF5)\n";
 
 static int default_grid(const sasnav_run *run, const sasnav_ping_pose *nav, sasnav_grid *g)
@@ -43,6 +48,34 @@ static int default_grid(const sasnav_run *run, const sasnav_ping_pose *nav, sasn
     return sasnav_grid_make(xmin, xmin + (nx - 1) * res, nx, r0 - 0.8, r0 - 0.8 + (ny - 1) * res, ny, g);
 }
 
+/* One ping: its backprojection, or its CGLS pseudo-inverse (k > 0). */
+static int image_one_ping(const sasnav_run *run, const sasnav_ping_pose *pose, int p,
+                          const sasnav_grid *grid, const sasnav_op_opts *oo, int k, double tikhonov,
+                          sasnav_cfloat *image)
+{
+    size_t np = (size_t)grid->nx * grid->ny;
+    double *x = malloc(sizeof(double) * np), *y = malloc(sizeof(double) * np);
+    if (!x || !y) {
+        free(x);
+        free(y);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    }
+    sasnav_grid_points(grid, (sasnav_pose){0, 0, 0}, x, y);
+    sasnav_op *op = NULL;
+    int rc = sasnav_op_create(&run->sys, &run->array, &run->win, (int)np, x, y, oo, &op);
+    free(x);
+    free(y);
+    if (!rc) rc = sasnav_op_set_geometry(op, pose);
+    if (!rc && k > 0) {
+        sasnav_cgls_opts co = {k, tikhonov};
+        rc = sasnav_cgls(op, sasnav_run_ping(run, p), &co, image, NULL);
+    } else if (!rc) {
+        rc = sasnav_op_adjoint(op, sasnav_run_ping(run, p), image);
+    }
+    sasnav_op_destroy(op);
+    return rc;
+}
+
 int cmd_image(int argc, char **argv)
 {
     static const struct option longopts[] = {
@@ -50,7 +83,10 @@ int cmd_image(int argc, char **argv)
         {"grid", required_argument, 0, 'g'}, {"png", required_argument, 0, 'P'},
         {"dynamic-range", required_argument, 0, 'd'}, {"threads", required_argument, 0, 't'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
-        {0, 0, 0, 0}};
+        {"ping", required_argument, 0, 'p'}, {"cgls", required_argument, 0, 'k'},
+        {"tikhonov", required_argument, 0, 'L'}, {0, 0, 0, 0}};
+    long ping = -1, cgls = 0;
+    double tikhonov = 0;
     const char *navfile = NULL, *gridtext = NULL, *png = NULL, *output = NULL;
     int use_truth = 0;
     double dr = 40.0;
@@ -72,11 +108,22 @@ int cmd_image(int argc, char **argv)
                 return cli_fail("image", 0, "--threads needs an integer 0..1024");
             break;
         case 'o': output = optarg; break;
+        case 'p':
+            if (cli_parse_int(optarg, 0, 10000000, &ping)) return cli_fail("image", 0, "--ping needs a ping index");
+            break;
+        case 'k':
+            if (cli_parse_int(optarg, 1, 10000, &cgls)) return cli_fail("image", 0, "--cgls needs 1..10000 iterations");
+            break;
+        case 'L':
+            if (cli_parse_double(optarg, &tikhonov) || tikhonov < 0)
+                return cli_fail("image", 0, "--tikhonov needs a number >= 0");
+            break;
         case 'h': fputs(help, stdout); return 0;
         default: fputs(help, stderr); return 2;
         }
     }
     if (optind != argc - 1) return cli_fail("image", 0, "exactly one input run file is required");
+    if (cgls && ping < 0) return cli_fail("image", 0, "--cgls needs --ping");
     if (!output) return cli_fail("image", 0, "an output file is required (-o image.h5)");
     if (navfile && use_truth) return cli_fail("image", 0, "--nav and --truth exclude each other");
     const char *input = argv[optind];
@@ -123,7 +170,17 @@ int cmd_image(int argc, char **argv)
     sasnav_op_opts oo;
     sasnav_op_default_opts(&oo);
     oo.nthreads = (int)threads;
-    rc = sasnav_backproject(run, nav, &grid, &oo, image);
+    if (ping >= run->n_pings) {
+        free(image);
+        free(own_nav);
+        int n = run->n_pings;
+        sasnav_run_free(run);
+        return cli_fail("image", 0, "--ping %ld: the run has %d pings", ping, n);
+    }
+    if (ping >= 0)
+        rc = image_one_ping(run, &nav[ping], (int)ping, &grid, &oo, (int)cgls, tikhonov, image);
+    else
+        rc = sasnav_backproject(run, nav, &grid, &oo, image);
     free(own_nav);
     sasnav_run_free(run);
     if (rc) {
