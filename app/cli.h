@@ -25,5 +25,6 @@ int cmd_simulate(int argc, char **argv);
 int cmd_image(int argc, char **argv);
 int cmd_pair(int argc, char **argv);
 int cmd_cuts(int argc, char **argv);
+int cmd_ingest(int argc, char **argv);
 
 #endif

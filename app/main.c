@@ -15,6 +15,7 @@ static const char *usage =
     "  image      backproject a run into an image (HDF5 and PNG)\n"
     "  pair       estimate the motion error between two pings\n"
     "  cuts       error-function cuts and maps around a point (CSV + PNG)\n"
+    "  ingest     real recordings (AirSAS) to a run: pulse compression, baseband\n"
     "\n"
     "Run 'sasnav COMMAND --help' for the options of a command.\n";
 
@@ -28,6 +29,7 @@ static const command commands[] = {
     {"image", cmd_image},
     {"pair", cmd_pair},
     {"cuts", cmd_cuts},
+    {"ingest", cmd_ingest},
 };
 
 int main(int argc, char **argv)
