@@ -28,7 +28,7 @@ static const char *help =
     "\n"
     "  --span S,W,Y   half-widths of the cuts (default 0.05 m, 0.01 m, 0.05 rad)\n"
     "  --n N          points per cut (default 81; maps default 21)\n"
-    "  --k K, --i I   iterations (default 5, 5; maps default 2, 1)\n";
+    "  --k K, --i I   iterations (default 8, 8; maps default 2, 1)\n";
 
 static const char *axis_name[3] = {"surge", "sway", "yaw"};
 static const char *axis_unit[3] = {"m", "m", "rad"};
@@ -229,8 +229,8 @@ int cmd_cuts(int argc, char **argv)
     sasnav_pair_opts po;
     sasnav_pair_default_opts(&po);
     po.nthreads = (int)threads;
-    po.k = (int)(k > 0 ? k : maps ? 2 : 5);
-    po.i = (int)(iters > 0 ? iters : maps ? 1 : 5);
+    po.k = (int)(k > 0 ? k : maps ? 2 : 8);
+    po.i = (int)(iters > 0 ? iters : maps ? 1 : 8);
     if (maps) {
         if (optind != argc) return cli_fail("cuts", 0, "--maps takes no run file");
         return maps_of_preset(preset, (int)(n > 0 ? n : 21), &po, dir);

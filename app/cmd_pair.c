@@ -23,7 +23,8 @@ static const char *help =
     "\n"
     "  --p I, --q J      ping indices (0-based)\n"
     "  --json            machine-readable output\n"
-    "  --k K, --i I      CGLS and alternating-projection iterations (default 5, 5)\n"
+    "  --k K, --i I      CGLS and alternating-projection iterations of the\n"
+    "                    final stage (default 8, 8; the paper used 5, 5)\n"
     "  --prior S,W,Y     prior motion error (default 0,0,0)\n"
     "  --no-global       skip the global stage (local search from the prior)\n"
     "  --range R         centre range of the estimation grid (default: the run's\n"
@@ -62,7 +63,7 @@ int cmd_pair(int argc, char **argv)
         {"range", required_argument, 0, 'R'}, {"threads", required_argument, 0, 't'},
         {"lag-model", required_argument, 0, 'L'},
         {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
-    long p = 0, q = 1, k = 5, iters = 5, nsub = 1, threads = 0;
+    long p = 0, q = 1, k = 8, iters = 8, nsub = 1, threads = 0;
     int json = 0, no_global = 0, have_p = 0, have_q = 0, motion_lag = 0;
     double prior[3] = {0, 0, 0}, range = NAN;
     int opt;

@@ -39,8 +39,9 @@ typedef enum {
 } sasnav_norm;
 
 typedef struct {
-    int k;                 /* CGLS iterations of the final stages (default 5) */
-    int i;                 /* alternating-projection iterations (default 5) */
+    int k;                 /* CGLS iterations of the final stage (default 8; the
+                              paper used 5) */
+    int i;                 /* alternating-projection iterations (default 8) */
     int coarse_k, coarse_i;/* iterations of the global and zeta stages (default 2, 1) */
     double tikhonov;       /* CGLS Tikhonov weight (default 0) */
     sasnav_norm norm;
