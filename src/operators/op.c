@@ -23,11 +23,12 @@
  * Storage (filled by set_geometry): for every (channel, point) pair the first
  * fine-grid index (int32), `wpad` kernel taps (float, zero beyond the kernel
  * width; evaluated from polynomial fits of the kernel, kernel.h, instead of
- * w exp/sqrt calls) and G (complex float). Pairs are stored in blocks of BLOCK points:
- * pair (l, n) at ((n / BLOCK) * n_rx + l) * BLOCK + n % BLOCK, so that a
- * channel's points are contiguous within a block (forward: loop over blocks
- * per channel) and a block's channels are close together (adjoint: loop over
- * channels per point).
+ * w exp/sqrt calls) and G (complex float). Pairs are stored in blocks of
+ * BLOCK points: pair (l, n) at ((n / BLOCK) * n_rx + l) * BLOCK + n % BLOCK,
+ * so that a channel's points are contiguous within a block and a block's
+ * channels are adjacent: the forward (each thread a range of channels, block
+ * by block) and the adjoint interpolation (block by block, all channels) both
+ * read the pair data as sequential streams.
  *
  * Threads: FFTW plans are made in create only (inside a named critical
  * section, since the FFTW planner is not re-entrant) and run with the
@@ -47,15 +48,27 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The per-pair loops of set_geometry compute every quantity for every pair
+ * and then select (dropped pairs, beam patterns); GCC will not vectorise such
+ * loops while it must assume that floating-point operations trap (its default
+ * -ftrapping-math), because it moves operations into the selected branches.
+ * Nothing here relies on FP exceptions. (-fno-math-errno cannot be set this
+ * way, hence sqrt_nr below.) */
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("no-trapping-math")
+#endif
+
 /* The hot loops are compiled twice, for baseline x86-64 (SSE2) and for
  * x86-64-v3 (AVX2 + FMA), and the loader picks the version the CPU supports
  * (GCC function multi-versioning; bench_op: about 1.6x on the adjoint),
  * unless the whole build already targets AVX2 (SASNAV_NATIVE). The versions
  * may differ in the last bits (FMA contraction), never with the thread count. */
+#ifndef HOT_LOOP /* -DHOT_LOOP= builds the baseline version only (tests) */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__AVX2__)
 #define HOT_LOOP __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
 #define HOT_LOOP
+#endif
 #endif
 
 #define BLOCK 64               /* points per block of the pair layout */
@@ -110,7 +123,8 @@ struct sasnav_op {
     /* FFT plans and work buffers. */
     fftwf_plan fine_fwd, fine_bwd, coarse_fwd, coarse_bwd;
     op_work *work;          /* one per thread */
-    float *adj_re, *adj_im; /* n_rx fine grids (lf + ext each) for the adjoint */
+    float *adj_re, *adj_im; /* n_rx split fine grids (lf + ext each): spread by T,
+                               interpolated by T^H */
     spread_fn spread;
     interp_fn interp;
     taps_fn taps_eval;
@@ -637,23 +651,55 @@ static inline void sincospi(double v, double *s, double *c)
 }
 
 /* Line-aperture pattern sinc(a) = sin(pi a) / (pi a), a = D sin(phi) / lambda,
- * sin(phi) = (unit vector element -> point) . (element axis). */
+ * sin(phi) = (unit vector element -> point) . (element axis). Written without
+ * a branch on the result: q is used in both cases so that the compiler
+ * cannot move the division into a branch. */
 static inline double sinc_pi(double a)
 {
     double s, c;
     sincospi(a, &s, &c);
     double pa = M_PI * a;
-    int small = fabs(pa) < 1e-8; /* both sides are evaluated in SIMD code */
-    return small ? 1.0 : s / (small ? 1.0 : pa);
+    double small = fabs(pa) < 1e-8 ? 1.0 : 0.0;
+    double q = s / (small != 0.0 ? 1.0 : pa);
+    return q * (1.0 - small) + small;
 }
 
-/* Spreading loss (SPEC 2); selects rather than a switch so that it vectorises. */
-static inline double attenuation(sasnav_attenuation model, double r_t, double r_r)
+/* sqrt without errno handling (libm's sqrt keeps a branch for x < 0 that
+ * stops vectorisation): Newton iterations on 1/sqrt(x) from a bit-level first
+ * guess (error < 3.5 %, then 2e-3, 4e-6, 3e-11), and one correction of
+ * x * y. Within 1 ulp of sqrt for every positive normal double (tested over
+ * 1e-12 .. 1e12); sqrt_nr(0) = 0; NaN for inf or NaN. */
+static inline double sqrt_nr(double x)
 {
-    double exploding = 1.0 / sqrt(r_t + r_r), spherical = 1.0 / (r_t * r_r);
-    return model == SASNAV_ATTEN_SPHERICAL ? spherical
-           : model == SASNAV_ATTEN_NONE    ? 1.0
-                                           : exploding;
+    uint64_t bits;
+    memcpy(&bits, &x, sizeof bits);
+    bits = 0x5FE6EB50C7B537A9ull - (bits >> 1);
+    double y;
+    memcpy(&y, &bits, sizeof y);
+    double hx = 0.5 * x;
+    y = y * (1.5 - hx * y * y);
+    y = y * (1.5 - hx * y * y);
+    y = y * (1.5 - hx * y * y);
+    double r = x * y;
+    return r + 0.5 * y * (x - r * r);
+}
+
+/* Spreading loss (SPEC 2) as c_exploding / sqrt(r_t + r_r) + c_spherical /
+ * (r_t r_r) + c_none, with one coefficient 1 and the others 0. */
+typedef struct {
+    double exploding, spherical, none;
+} attenuation_coefs;
+
+static attenuation_coefs attenuation_model(sasnav_attenuation model)
+{
+    attenuation_coefs a = {0.0, 0.0, 0.0};
+    if (model == SASNAV_ATTEN_SPHERICAL)
+        a.spherical = 1.0;
+    else if (model == SASNAV_ATTEN_NONE)
+        a.none = 1.0;
+    else
+        a.exploding = 1.0;
+    return a;
 }
 
 static int check_pose(sasnav_pose p)
@@ -674,24 +720,26 @@ HOT_LOOP static int setup_tx(sasnav_op *op, const ping_geometry *g, int n0, int 
     const double *restrict x = op->x, *restrict y = op->y;
     double *restrict range = op->tx_range, *restrict gain = op->tx_gain;
     double hz2 = op->array.tx_height * op->array.tx_height;
+    const double min2 = MIN_SENSOR_DISTANCE * MIN_SENSOR_DISTANCE;
     int bad = 0;
 #pragma omp simd reduction(+ : bad)
     for (int n = n0; n < n1; n++) {
         double dx = x[n] - g->tx_x, dy = y[n] - g->tx_y;
-        double r = sqrt(dx * dx + dy * dy + hz2);
-        bad += !(r >= MIN_SENSOR_DISTANCE);
-        double r_safe = r > 0.0 ? r : 1.0;
+        double r2 = dx * dx + dy * dy + hz2;
+        bad += !(r2 >= min2);
+        double r = sqrt_nr(r2);
         range[n] = r;
-        gain[n] = g->tx_aperture > 0.0
-                      ? sinc_pi(g->tx_aperture * (dx * g->tx_cos + dy * g->tx_sin) / r_safe)
-                      : 1.0;
+        gain[n] = sinc_pi(g->tx_aperture * (dx * g->tx_cos + dy * g->tx_sin) / (r + 1e-300));
     }
     return bad;
 }
 
 /* Pairs of channel l and block b: delay (double), first fine index, kernel
  * offset, G. Returns the number of dropped pairs; *bad counts points closer
- * than MIN_SENSOR_DISTANCE to the receiver. */
+ * than MIN_SENSOR_DISTANCE to the receiver. Every quantity is computed for
+ * every pair and dropped pairs are then zeroed by selects (vectorisable);
+ * their values may be garbage (even NaN for absurd coordinates), never their
+ * stored results. */
 HOT_LOOP static long setup_block(sasnav_op *op, const ping_geometry *g, int l, int b, int *bad)
 {
     int n0 = b * BLOCK, count = op->n_points - n0 < BLOCK ? op->n_points - n0 : BLOCK;
@@ -703,37 +751,49 @@ HOT_LOOP static long setup_block(sasnav_op *op, const ping_geometry *g, int l, i
     float t[BLOCK], keep[BLOCK];
     double u_rx = op->array.rx_u[l];
     double xr = g->ar_x + u_rx * g->ar_cos, yr = g->ar_y + u_rx * g->ar_sin;
+    double ar_cos = g->ar_cos, ar_sin = g->ar_sin, aperture = g->rx_aperture;
     double hz2 = op->array.rx_height * op->array.rx_height;
+    const double min2 = MIN_SENSOR_DISTANCE * MIN_SENSOR_DISTANCE;
     double inv_c = 1.0 / op->sys.sound_speed, inv_h = 1.0 / op->h, two_f0 = 2.0 * op->sys.f0;
-    double half = 0.5 * op->kernel.width, u_max = op->lf - half;
-    sasnav_attenuation model = op->sys.attenuation;
+    double start = op->grid_start, half = 0.5 * op->kernel.width, u_max = op->lf - half;
+    double v_max = u_max - half;
+    attenuation_coefs att = attenuation_model(op->sys.attenuation);
     long dropped = 0;
     int near = 0;
 #pragma omp simd reduction(+ : dropped, near)
     for (int i = 0; i < count; i++) {
         double dx = x[i] - xr, dy = y[i] - yr;
-        double r_r = sqrt(dx * dx + dy * dy + hz2), r_t = r_tx[i];
-        near += !(r_r >= MIN_SENSOR_DISTANCE);
-        double r_safe = r_r > 0.0 ? r_r : 1.0;
+        double r2 = dx * dx + dy * dy + hz2;
+        near += !(r2 >= min2);
+        double r_r = sqrt_nr(r2), r_t = r_tx[i];
+        double r_safe = r_r + 1e-300;
         double tau = (r_t + r_r) * inv_c;
-        double u = (tau - op->grid_start) * inv_h; /* fine-grid coordinate */
-        int in = u >= half && u <= u_max;
+        double u = (tau - start) * inv_h; /* fine-grid coordinate */
+        int in = (u >= half) & (u <= u_max);
         dropped += !in;
-        /* Kernel covers i0 .. i0 + w - 1, i0 = ceil(u - w/2) >= 0. */
-        double v = in ? u - half : 0.0;
+        /* Kernel covers i0 .. i0 + w - 1, i0 = ceil(u - w/2) in [0, lf - w];
+         * v is clamped so that the conversion is defined for any u. */
+        double v = u - half;
+        v = v > 0.0 ? v : 0.0;
+        v = v < v_max ? v : v_max;
         double i0 = (double)(int32_t)v;
         i0 += i0 < v ? 1.0 : 0.0;
         index[i] = in ? (int32_t)i0 : 0;
         t[i] = (float)(2.0 * (i0 - v) - 1.0);
         keep[i] = in ? 1.0f : 0.0f;
-        double pattern = g->rx_aperture > 0.0
-                             ? sinc_pi(g->rx_aperture * (dx * g->ar_cos + dy * g->ar_sin) / r_safe)
-                             : 1.0;
-        double alpha = in ? gain_tx[i] * pattern * attenuation(model, r_t, r_safe) : 0.0;
+        double pattern = sinc_pi(aperture * (dx * ar_cos + dy * ar_sin) / r_safe);
+        double loss = att.exploding / sqrt_nr(r_t + r_safe) + att.spherical / (r_t * r_safe) +
+                      att.none;
+        double alpha = gain_tx[i] * pattern * loss;
+        alpha = u >= half ? alpha : 0.0;
+        alpha = u <= u_max ? alpha : 0.0;
         /* G = alpha exp(-j 2 pi f0 tau) = alpha (cos(pi 2 f0 tau) - j sin(...));
          * 2 f0 tau (~8000 at 10 m) is reduced in double inside sincospi. */
+        double cycles = two_f0 * tau;
+        cycles = u >= half ? cycles : 0.0;
+        cycles = u <= u_max ? cycles : 0.0;
         double sn, cs;
-        sincospi(in ? two_f0 * tau : 0.0, &sn, &cs);
+        sincospi(cycles, &sn, &cs);
         green[2 * i] = (float)(alpha * cs);
         green[2 * i + 1] = (float)(-alpha * sn);
     }
