@@ -26,5 +26,7 @@ int cmd_image(int argc, char **argv);
 int cmd_pair(int argc, char **argv);
 int cmd_cuts(int argc, char **argv);
 int cmd_ingest(int argc, char **argv);
+int cmd_navigate(int argc, char **argv);
+int cmd_demo(int argc, char **argv);
 
 #endif

@@ -16,6 +16,8 @@ static const char *usage =
     "  pair       estimate the motion error between two pings\n"
     "  cuts       error-function cuts and maps around a point (CSV + PNG)\n"
     "  ingest     real recordings (AirSAS) to a run: pulse compression, baseband\n"
+    "  navigate   estimate the trajectory of a whole run (subspace or DPCA)\n"
+    "  demo       paper-trajectory end to end: navigation, images, report\n"
     "\n"
     "Run 'sasnav COMMAND --help' for the options of a command.\n";
 
@@ -30,6 +32,8 @@ static const command commands[] = {
     {"pair", cmd_pair},
     {"cuts", cmd_cuts},
     {"ingest", cmd_ingest},
+    {"navigate", cmd_navigate},
+    {"demo", cmd_demo},
 };
 
 int main(int argc, char **argv)

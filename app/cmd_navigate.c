@@ -1,0 +1,236 @@
+/* sasnav navigate: the trajectory of a whole run from ping-pair estimates
+ * (paper Section IV-C). */
+#include "cli.h"
+#include "sasnav/io.h"
+#include "sasnav/navigate.h"
+
+#include <getopt.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static const char *help =
+    "usage: sasnav navigate run.h5 [--method subspace|dpca] [--long-baselines]\n"
+    "                       [--k K] [--i I] [--threads N] [--json] -o nav.h5\n"
+    "\n"
+    "Estimates the displacement of every consecutive ping pair, composes them\n"
+    "into a trajectory starting at the run's nominal first ping, aligns it to\n"
+    "the nominal track (the removed track angle is reported) and writes the\n"
+    "estimated navigation (docs/format.md; with the run's ground truth when it\n"
+    "has one). Where the run holds the truth, prints the per-pair errors and\n"
+    "the cumulative errors of the trajectory (the true trajectory moved\n"
+    "rigidly onto the estimated first ping: the first pose is not observable).\n"
+    "A pair whose estimate fails is taken as nominal and reported; the exit\n"
+    "status stays 0.\n"
+    "\n"
+    "  --method M        subspace (default; subspace intersection) or dpca\n"
+    "  --long-baselines  also estimate pairs (p, p+2) and combine all by least\n"
+    "                    squares (skipped where they share < 2 phase centres)\n"
+    "  --k K, --i I      CGLS and alternating-projection iterations of the\n"
+    "                    subspace estimator's final stage (default: the\n"
+    "                    estimator's, see 'sasnav pair --help')\n"
+    "  --threads N       OpenMP threads (default: all cores)\n"
+    "  --json            machine-readable summary on stdout\n"
+    "  -o FILE           output navigation file (HDF5)\n"
+    "\n"
+    "A progress bar is drawn on stderr when it is a terminal.\n";
+
+/* Progress bar on a terminal's stderr. */
+static void progress_bar(const sasnav_navigate_progress *pr, void *user)
+{
+    (void)user;
+    const int width = 30;
+    int filled = pr->total > 0 ? width * pr->done / pr->total : width;
+    char bar[64];
+    for (int j = 0; j < width; j++) bar[j] = j < filled ? '#' : '.';
+    bar[width] = '\0';
+    fprintf(stderr, "\rsasnav navigate: [%s] %d/%d pairs  %.1f s", bar, pr->done, pr->total,
+            pr->seconds);
+    if (pr->done == pr->total) fputc('\n', stderr);
+    fflush(stderr);
+}
+
+static json_t *real_or_null(double v) { return isfinite(v) ? json_real(v) : json_null(); }
+
+static json_t *pose_json(sasnav_pose e)
+{
+    json_t *o = json_object();
+    json_object_set_new(o, "surge", real_or_null(e.x));
+    json_object_set_new(o, "sway", real_or_null(e.y));
+    json_object_set_new(o, "yaw", real_or_null(e.theta));
+    return o;
+}
+
+static const char *status_text(int status)
+{
+    return status == SASNAV_OK ? "ok" : sasnav_strerror(status);
+}
+
+static void print_json(const char *input, const sasnav_navigation *nav)
+{
+    json_t *root = json_object();
+    int n = nav->n_pings;
+    json_object_set_new(root, "input", json_string(input));
+    json_object_set_new(root, "method",
+                        json_string(nav->method == SASNAV_METHOD_DPCA ? "dpca" : "subspace"));
+    json_object_set_new(root, "n_pings", json_integer(n));
+    json_object_set_new(root, "failed_pairs", json_integer(nav->n_failed));
+    json_object_set_new(root, "skipped_long_baselines", json_integer(nav->n_skipped));
+    json_object_set_new(root, "has_truth", json_boolean(nav->has_truth));
+    if (nav->has_truth) {
+        sasnav_pose f = nav->cumulative[n - 1];
+        json_object_set_new(root, "final_surge_error", real_or_null(f.x));
+        json_object_set_new(root, "final_sway_error", real_or_null(f.y));
+        json_object_set_new(root, "final_yaw_error", real_or_null(f.theta));
+        json_object_set_new(root, "rms_sway_error", real_or_null(nav->rms_cumulative.y));
+        json_object_set_new(root, "rms_cumulative_error", pose_json(nav->rms_cumulative));
+        json_object_set_new(root, "rms_differential_error", pose_json(nav->rms_differential));
+    } else {
+        json_object_set_new(root, "final_surge_error", json_null());
+        json_object_set_new(root, "final_sway_error", json_null());
+        json_object_set_new(root, "final_yaw_error", json_null());
+        json_object_set_new(root, "rms_sway_error", json_null());
+    }
+    json_t *pairs = json_array();
+    for (int j = 0; j < nav->n_pairs; j++) {
+        const sasnav_navigate_pair *np = &nav->pairs[j];
+        json_t *o = json_object();
+        json_object_set_new(o, "p", json_integer(np->p));
+        json_object_set_new(o, "q", json_integer(np->q));
+        json_object_set_new(o, "status", json_string(status_text(np->status)));
+        json_object_set_new(o, "surge", real_or_null(np->result.error.x));
+        json_object_set_new(o, "sway", real_or_null(np->result.error.y));
+        json_object_set_new(o, "yaw", real_or_null(np->result.error.theta));
+        if (nav->has_truth) {
+            json_object_set_new(o, "truth", pose_json(np->truth));
+            json_object_set_new(o, "error", pose_json(np->error));
+        }
+        json_object_set_new(o, "evaluations", json_integer(np->result.evaluations));
+        json_object_set_new(o, "seconds", real_or_null(np->result.seconds));
+        json_array_append_new(pairs, o);
+    }
+    json_object_set_new(root, "pairs", pairs);
+    if (nav->has_truth) {
+        json_t *cum = json_array();
+        for (int i = 0; i < n; i++) json_array_append_new(cum, pose_json(nav->cumulative[i]));
+        json_object_set_new(root, "cumulative_error", cum);
+    }
+    json_object_set_new(root, "track_angle", real_or_null(nav->track_angle));
+    json_object_set_new(root, "least_squares_iterations", json_integer(nav->lsq_iterations));
+    json_object_set_new(root, "seconds", real_or_null(nav->seconds));
+    json_object_set_new(root, "seconds_per_pair", real_or_null(nav->seconds_per_pair));
+    char *text = json_dumps(root, JSON_INDENT(2) | JSON_REAL_PRECISION(10));
+    if (text) puts(text);
+    free(text);
+    json_decref(root);
+}
+
+static void print_text(const sasnav_navigation *nav)
+{
+    printf("%-8s %10s %10s %12s", "pair", "surge mm", "sway mm", "yaw rad");
+    if (nav->has_truth) printf(" %10s %10s %12s", "err mm", "err mm", "err rad");
+    printf("  %7s  status\n", "s");
+    for (int j = 0; j < nav->n_pairs; j++) {
+        const sasnav_navigate_pair *np = &nav->pairs[j];
+        char name[32];
+        snprintf(name, sizeof name, "%d-%d", np->p, np->q);
+        printf("%-8s %+10.3f %+10.4f %+12.4e", name, 1e3 * np->result.error.x,
+               1e3 * np->result.error.y, np->result.error.theta);
+        if (nav->has_truth)
+            printf(" %+10.3f %+10.4f %+12.4e", 1e3 * np->error.x, 1e3 * np->error.y, np->error.theta);
+        printf("  %7.2f  %s\n", np->result.seconds, status_text(np->status));
+    }
+    printf("track angle removed: %.4e rad\n", nav->track_angle);
+    if (nav->has_truth) {
+        sasnav_pose f = nav->cumulative[nav->n_pings - 1];
+        printf("final cumulative error: surge %+.3f mm, sway %+.4f mm, yaw %+.3e rad\n", 1e3 * f.x,
+               1e3 * f.y, f.theta);
+        printf("rms cumulative error:   surge %.3f mm, sway %.4f mm, yaw %.3e rad\n",
+               1e3 * nav->rms_cumulative.x, 1e3 * nav->rms_cumulative.y, nav->rms_cumulative.theta);
+    }
+    printf("%d pairs in %.2f s (%.2f s per pair)\n", nav->n_pairs, nav->seconds,
+           nav->seconds_per_pair);
+}
+
+int cmd_navigate(int argc, char **argv)
+{
+    static const struct option longopts[] = {
+        {"method", required_argument, 0, 'm'}, {"long-baselines", no_argument, 0, 'L'},
+        {"k", required_argument, 0, 'k'},      {"i", required_argument, 0, 'i'},
+        {"threads", required_argument, 0, 't'}, {"json", no_argument, 0, 'j'},
+        {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
+        {0, 0, 0, 0}};
+    sasnav_navigate_opts no;
+    sasnav_navigate_default_opts(&no);
+    const char *output = NULL;
+    long threads = 0, k = no.pair.k, iters = no.pair.i;
+    int json = 0, opt;
+    optind = 1;
+    while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
+        switch (opt) {
+        case 'm':
+            if (!strcmp(optarg, "subspace")) no.method = SASNAV_METHOD_SUBSPACE;
+            else if (!strcmp(optarg, "dpca")) no.method = SASNAV_METHOD_DPCA;
+            else return cli_fail("navigate", 0, "--method needs subspace or dpca (got '%s')", optarg);
+            break;
+        case 'L': no.long_baselines = 1; break;
+        case 'k':
+            if (cli_parse_int(optarg, 1, 100, &k)) return cli_fail("navigate", 0, "--k needs 1..100");
+            break;
+        case 'i':
+            if (cli_parse_int(optarg, 1, 100, &iters)) return cli_fail("navigate", 0, "--i needs 1..100");
+            break;
+        case 't':
+            if (cli_parse_int(optarg, 0, 1024, &threads))
+                return cli_fail("navigate", 0, "--threads needs an integer 0..1024");
+            break;
+        case 'j': json = 1; break;
+        case 'o': output = optarg; break;
+        case 'h': fputs(help, stdout); return 0;
+        default: fputs(help, stderr); return 2;
+        }
+    }
+    if (optind != argc - 1) return cli_fail("navigate", 0, "exactly one input run file is required");
+    if (!output) return cli_fail("navigate", 0, "an output file is required (-o nav.h5)");
+    const char *input = argv[optind];
+    no.pair.k = (int)k;
+    no.pair.i = (int)iters;
+    /* The coarse stages never use more iterations than the final one. */
+    if (no.pair.coarse_k > no.pair.k) no.pair.coarse_k = no.pair.k;
+    if (no.pair.coarse_i > no.pair.i) no.pair.coarse_i = no.pair.i;
+    no.nthreads = (int)threads;
+    if (isatty(STDERR_FILENO)) no.progress = progress_bar;
+
+    sasnav_run *run = NULL;
+    int rc = sasnav_run_read(input, &run);
+    if (rc) return cli_fail("navigate", rc, "cannot read %s", input);
+    sasnav_navigation nav;
+    rc = sasnav_navigate(run, &no, &nav);
+    if (rc) {
+        sasnav_run_free(run);
+        return cli_fail("navigate", rc, "navigation of %s failed", input);
+    }
+    rc = sasnav_nav_write(output, nav.n_pings, nav.nav, run->truth);
+    sasnav_run_free(run);
+    if (rc) {
+        sasnav_navigation_free(&nav);
+        return cli_fail("navigate", rc, "cannot write %s", output);
+    }
+    for (int j = 0; j < nav.n_pairs; j++)
+        if (nav.pairs[j].status != SASNAV_OK)
+            fprintf(stderr, "sasnav navigate: warning: pair %d-%d: %s%s\n", nav.pairs[j].p,
+                    nav.pairs[j].q, sasnav_strerror(nav.pairs[j].status),
+                    nav.pairs[j].status == SASNAV_ERR_NOT_CONVERGED ? " (estimate kept)"
+                                                                   : " (nominal used)");
+    if (nav.n_skipped > 0)
+        fprintf(stderr, "sasnav navigate: %d long baselines skipped (< 2 phase centres overlap)\n",
+                nav.n_skipped);
+    if (json) print_json(input, &nav);
+    else print_text(&nav);
+    fprintf(stderr, "sasnav navigate: %d pings -> %s\n", nav.n_pings, output);
+    sasnav_navigation_free(&nav);
+    return 0;
+}

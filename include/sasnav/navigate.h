@@ -1,0 +1,168 @@
+/* sasnav -- navigation of a whole run from ping-pair estimates (paper
+ * Section IV-C, SPEC 4 paper-trajectory).
+ *
+ * sasnav_navigate estimates the displacement of every consecutive ping pair
+ * (p, p + 1) of a run, with the subspace-intersection estimator
+ * (estimator.h) or the DPCA baseline (dpca.h), and optionally of the longer
+ * baselines (p, p + 2). It then
+ *   1. turns them into PCA-centroid poses: the chain composed from the
+ *      run's nominal first centroid (sasnav_traj_compose) or, with long
+ *      baselines, the weighted least-squares solution over all links
+ *      (sasnav_traj_solve, same gauge);
+ *   2. aligns the centroids to the nominal track (sasnav_traj_align): the
+ *      fitted track angle is removed by a rigid rotation about the first
+ *      centroid and reported;
+ *   3. places the EPCA ping geometry (run->tx_lag) at each centroid
+ *      (sasnav_traj_ping_poses): these are the estimated ping poses;
+ *   4. where the run holds the truth: the true motion error of every pair
+ *      and the estimate's error, and the cumulative / differential errors of
+ *      the trajectory (sasnav_traj_errors) against the true centroids
+ *      carried rigidly into the estimate's frame so that the first
+ *      centroids coincide (the first pose is the gauge: a pair estimator
+ *      cannot know it).
+ *
+ * Motion error = displacement - nominal displacement (component-wise,
+ * surge, sway, yaw), nominal = displacement between the run's own /nav
+ * poses.
+ *
+ * Failed pairs. An estimate that cannot be made (the estimator reports no
+ * overlap, bad channel data, a DPCA geometry it refuses...) does not stop
+ * the navigation: the pair's status holds the code, its displacement is
+ * taken as nominal (motion error 0) and n_failed counts it. Out of memory,
+ * FFTW and internal errors stop it and are returned.
+ *
+ * Long baselines (p, p + 2) are estimated only when at least two phase
+ * centres of the two pings nominally overlap; in paper-trajectory (20 cm
+ * ping spacing, 40 cm of phase centres) they share none and are skipped
+ * (n_skipped).
+ *
+ * The library never prints: progress is reported through the optional
+ * callback in the options.
+ *
+ * Thread safety: re-entrant for distinct runs and outputs; the callback is
+ * called from the calling thread. The pairs are estimated one after the
+ * other by one estimator object (sasnav_pair_set_data per pair); the
+ * operators inside use opts.nthreads OpenMP threads.
+ */
+#ifndef SASNAV_NAVIGATE_H
+#define SASNAV_NAVIGATE_H
+
+#include "sasnav/dpca.h"
+#include "sasnav/estimator.h"
+#include "sasnav/run.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum {
+    SASNAV_METHOD_SUBSPACE = 0, /* subspace intersection (paper Section III) */
+    SASNAV_METHOD_DPCA = 1      /* DPCA baseline (Bellettini & Pinto 2002) */
+} sasnav_method;
+
+/* What the progress callback is told. Called once before the first pair
+ * (done = 0, pair = NULL) and after every estimated pair. */
+typedef struct {
+    int done, total;     /* pairs estimated so far / to estimate */
+    int p, q;            /* the pair just estimated (-1 before the first) */
+    int status;          /* its status (SASNAV_OK or the failure code) */
+    const sasnav_pair_result *result; /* its result (NULL before the first) */
+    double seconds;      /* wall time since sasnav_navigate started */
+} sasnav_navigate_progress;
+
+typedef void (*sasnav_progress_fn)(const sasnav_navigate_progress *progress, void *user);
+
+typedef struct {
+    sasnav_method method;     /* default SASNAV_METHOD_SUBSPACE */
+    int long_baselines;       /* 1: also estimate (p, p + 2), combined by least
+                                 squares (default 0) */
+    sasnav_pair_opts pair;    /* subspace estimator options (defaults);
+                                 range and tx_lag are replaced by the run's
+                                 range_of_interest and tx_lag */
+    sasnav_dpca_opts dpca;    /* DPCA options (defaults) */
+    sasnav_pose link_sigma;   /* standard deviations of a consecutive pair's
+                                 surge, sway, yaw in the least squares
+                                 (default 1e-3 m, 2e-5 m, 5e-5 rad: the
+                                 subspace estimator's measured spread, SPEC 6) */
+    sasnav_pose long_sigma;   /* same for (p, p + 2) (default twice link_sigma:
+                                 fewer phase centres overlap) */
+    int align;                /* 1 (default): remove the fitted track angle */
+    int nthreads;             /* OpenMP threads of the estimators (0 = OpenMP
+                                 default); copied into pair and dpca */
+    sasnav_progress_fn progress; /* may be NULL */
+    void *progress_user;      /* passed to progress */
+} sasnav_navigate_opts;
+
+/* Fills the defaults above. */
+void sasnav_navigate_default_opts(sasnav_navigate_opts *opts);
+
+/* One estimated pair. */
+typedef struct {
+    int p, q;
+    int status;                /* SASNAV_OK, or the code that made it fail
+                                  (then result.error = 0 was used) or the
+                                  estimator's own status (result.status:
+                                  SASNAV_ERR_NOT_CONVERGED keeps the estimate) */
+    sasnav_pose nominal;       /* nominal displacement (from run->nav) */
+    sasnav_pair_result result; /* the estimator's result (motion error in
+                                  result.error) */
+    sasnav_pose truth;         /* true motion error (0 without truth) */
+    sasnav_pose error;         /* result.error - truth (0 without truth) */
+} sasnav_navigate_pair;
+
+/* Output of sasnav_navigate; release the arrays with sasnav_navigation_free. */
+typedef struct {
+    sasnav_method method;
+    int n_pings;
+    int n_pairs;                  /* entries of pairs[]: the n_pings - 1
+                                     consecutive pairs first, then the long
+                                     baselines (p, p + 2) that were estimated */
+    sasnav_navigate_pair *pairs;
+    int n_failed;                 /* pairs whose estimate failed (nominal used) */
+    int n_skipped;                /* long baselines not estimated (< 2 phase
+                                     centres overlap) */
+    sasnav_pose *centroids;       /* n_pings estimated PCA centroids (aligned) */
+    sasnav_ping_pose *nav;        /* n_pings estimated ping poses (EPCA geometry) */
+    double track_angle;           /* rad, angle removed by the alignment (0 when
+                                     opts.align = 0) */
+    int lsq_iterations;           /* Gauss-Newton iterations (0: chain only) */
+    /* Runs with truth (otherwise NULL / 0): */
+    int has_truth;
+    sasnav_pose *truth_centroids; /* true centroids moved rigidly so that the
+                                     first coincides with centroids[0] */
+    sasnav_ping_pose *anchored;   /* estimated ping poses moved rigidly so that
+                                     the first centroid coincides with the
+                                     true one (what an external fix of the
+                                     first pose gives; compare images with it) */
+    sasnav_pose *cumulative;      /* n_pings: centroids - truth_centroids
+                                     (surge, sway along / across the aligned
+                                     track, yaw); cumulative[0] = 0 */
+    sasnav_pose *differential;    /* n_pings: error of the displacement of
+                                     ping i relative to i - 1; [0] = 0 */
+    sasnav_pose rms_cumulative;   /* rms over the pings of cumulative[] */
+    sasnav_pose rms_differential; /* rms over pings 1.. of differential[] */
+    /* Timings (wall clock, s): */
+    double seconds;               /* the whole call */
+    double seconds_pairs;         /* sum of the pair estimates */
+    double seconds_per_pair;      /* seconds_pairs / pairs estimated */
+} sasnav_navigation;
+
+/* Navigates `run` (at least 2 pings, validated with sasnav_run_check).
+ * `opts` may be NULL (defaults). `out` is overwritten (not freed first).
+ * Returns SASNAV_OK (inspect n_failed), SASNAV_ERR_ARG (bad run or
+ * options; DPCA on a run whose consecutive pairs it cannot pair up is
+ * reported per pair, not here), SASNAV_ERR_NOMEM, SASNAV_ERR_FFT,
+ * SASNAV_ERR_INTERNAL, SASNAV_ERR_GEOMETRY (singular least squares,
+ * coincident centroids when aligning), SASNAV_ERR_NOT_CONVERGED (least
+ * squares iterations exhausted). On failure `out` holds no memory. */
+int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
+                    sasnav_navigation *out);
+
+/* Frees the arrays of `nav` and zeroes it. Safe on NULL and on a zeroed
+ * struct. */
+void sasnav_navigation_free(sasnav_navigation *nav);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

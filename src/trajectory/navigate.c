@@ -1,0 +1,347 @@
+/* Navigation of a whole run: ping-pair estimates -> trajectory (paper
+ * Section IV-C). See navigate.h for the contract. */
+#include "sasnav/navigate.h"
+#include "sasnav/error.h"
+#include "sasnav/trajectory.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+void sasnav_navigate_default_opts(sasnav_navigate_opts *opts)
+{
+    if (!opts) return;
+    memset(opts, 0, sizeof *opts);
+    opts->method = SASNAV_METHOD_SUBSPACE;
+    opts->long_baselines = 0;
+    sasnav_pair_default_opts(&opts->pair);
+    sasnav_dpca_default_opts(&opts->dpca);
+    opts->link_sigma = (sasnav_pose){1e-3, 2e-5, 5e-5};
+    opts->long_sigma = (sasnav_pose){2e-3, 4e-5, 1e-4};
+    opts->align = 1;
+    opts->nthreads = 0;
+    opts->progress = NULL;
+    opts->progress_user = NULL;
+}
+
+void sasnav_navigation_free(sasnav_navigation *nav)
+{
+    if (!nav) return;
+    free(nav->pairs);
+    free(nav->centroids);
+    free(nav->nav);
+    free(nav->truth_centroids);
+    free(nav->anchored);
+    free(nav->cumulative);
+    free(nav->differential);
+    memset(nav, 0, sizeof *nav);
+}
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+static sasnav_pose pose_sub(sasnav_pose a, sasnav_pose b)
+{
+    return (sasnav_pose){a.x - b.x, a.y - b.y, sasnav_wrap_angle(a.theta - b.theta)};
+}
+
+static int sigma_ok(sasnav_pose s)
+{
+    return s.x > 0 && s.y > 0 && s.theta > 0 && isfinite(s.x) && isfinite(s.y) && isfinite(s.theta);
+}
+
+/* Number of ping q's phase centres that nominally fall on ping p's, for an
+ * along-track nominal displacement `along` (PCA of receiver l at u_l / 2 in
+ * the centroid frame, EPCA model). */
+static int overlapping_phase_centres(const sasnav_array *array, double along)
+{
+    double lo = INFINITY, hi = -INFINITY;
+    for (int l = 0; l < array->n_rx; l++) {
+        double v = 0.5 * array->rx_u[l];
+        if (v < lo) lo = v;
+        if (v > hi) hi = v;
+    }
+    const double tol = 1e-6;
+    int k = 0;
+    for (int l = 0; l < array->n_rx; l++) {
+        double v = along + 0.5 * array->rx_u[l];
+        if (v >= lo - tol && v <= hi + tol) k++;
+    }
+    return k;
+}
+
+/* Codes that mean the navigation cannot go on (not a property of one pair). */
+static int fatal_code(int rc)
+{
+    return rc == SASNAV_ERR_NOMEM || rc == SASNAV_ERR_FFT || rc == SASNAV_ERR_INTERNAL;
+}
+
+typedef struct {
+    const sasnav_run *run;
+    const sasnav_navigate_opts *opts;
+    sasnav_pair *estimator; /* subspace: one object, reused for every pair */
+    double t0;
+} nav_ctx;
+
+/* Estimates pair (p, q) into *np. Returns a fatal code, else SASNAV_OK
+ * with np->status telling how the pair went. */
+static int estimate_pair(nav_ctx *ctx, int p, int q, sasnav_navigate_pair *np)
+{
+    const sasnav_run *run = ctx->run;
+    memset(np, 0, sizeof *np);
+    np->p = p;
+    np->q = q;
+    np->nominal = sasnav_ping_displacement(&run->nav[p], &run->nav[q]);
+    if (run->truth) {
+        sasnav_pose d = sasnav_ping_displacement(&run->truth[p], &run->truth[q]);
+        np->truth = pose_sub(d, np->nominal);
+    }
+    int rc;
+    if (ctx->opts->method == SASNAV_METHOD_DPCA) {
+        sasnav_dpca_opts o = ctx->opts->dpca;
+        o.nthreads = ctx->opts->nthreads;
+        rc = sasnav_dpca_estimate(run, p, q, &o, &np->result, NULL);
+    } else {
+        double t = now_seconds();
+        rc = sasnav_pair_set_data(ctx->estimator, sasnav_run_ping(run, p), sasnav_run_ping(run, q),
+                                  np->nominal);
+        if (!rc) rc = sasnav_pair_estimate(ctx->estimator, &np->result);
+        if (rc) np->result.seconds = now_seconds() - t;
+    }
+    if (fatal_code(rc)) return rc;
+    if (!rc && np->result.status == SASNAV_ERR_NO_OVERLAP) rc = SASNAV_ERR_NO_OVERLAP;
+    if (rc) {
+        /* No usable estimate: nominal displacement, flagged. */
+        double seconds = np->result.seconds;
+        memset(&np->result, 0, sizeof np->result);
+        np->result.status = rc;
+        np->result.displacement = np->nominal;
+        np->result.seconds = seconds;
+        np->status = rc;
+    } else {
+        np->status = np->result.status;
+    }
+    if (run->truth) np->error = pose_sub(np->result.error, np->truth);
+    return SASNAV_OK;
+}
+
+static void report(nav_ctx *ctx, int done, int total, const sasnav_navigate_pair *np)
+{
+    if (!ctx->opts->progress) return;
+    sasnav_navigate_progress pr = {done, total, np ? np->p : -1, np ? np->q : -1,
+                                   np ? np->status : SASNAV_OK, np ? &np->result : NULL,
+                                   now_seconds() - ctx->t0};
+    ctx->opts->progress(&pr, ctx->opts->progress_user);
+}
+
+static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
+{
+    if (!run) return sasnav_set_error(SASNAV_ERR_ARG, "navigate: NULL run");
+    int rc = sasnav_run_check(run);
+    if (rc) return rc;
+    if (run->n_pings < 2)
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigate: the run needs at least 2 pings (has %d)",
+                                run->n_pings);
+    if (o->method != SASNAV_METHOD_SUBSPACE && o->method != SASNAV_METHOD_DPCA)
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigate: unknown method %d", (int)o->method);
+    if (!sigma_ok(o->link_sigma) || !sigma_ok(o->long_sigma))
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigate: link standard deviations must be > 0");
+    if (o->nthreads < 0) return sasnav_set_error(SASNAV_ERR_ARG, "navigate: nthreads < 0");
+    if (o->method == SASNAV_METHOD_SUBSPACE && !(run->range_of_interest > 0))
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigate: the run has no range of interest");
+    if (!(run->tx_lag >= 0) || !isfinite(run->tx_lag))
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigate: the run's Tx-array offset is invalid");
+    return SASNAV_OK;
+}
+
+/* Estimates all pairs into out->pairs (allocated). */
+static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
+{
+    const sasnav_run *run = ctx->run;
+    int n = run->n_pings;
+    int n_long = ctx->opts->long_baselines ? n - 2 : 0;
+    if (n_long < 0) n_long = 0;
+    /* Decide which long baselines can be estimated at all. */
+    int total = n - 1;
+    char *use_long = calloc((size_t)(n_long > 0 ? n_long : 1), 1);
+    if (!use_long) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    for (int p = 0; p < n_long; p++) {
+        sasnav_pose nom = sasnav_ping_displacement(&run->nav[p], &run->nav[p + 2]);
+        if (overlapping_phase_centres(&run->array, nom.x) >= 2) {
+            use_long[p] = 1;
+            total++;
+        } else {
+            out->n_skipped++;
+        }
+    }
+    out->pairs = calloc((size_t)total, sizeof *out->pairs);
+    if (!out->pairs) {
+        free(use_long);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    }
+    report(ctx, 0, total, NULL);
+    int k = 0, rc = SASNAV_OK;
+    for (int p = 0; p + 1 < n && !rc; p++, k++) {
+        rc = estimate_pair(ctx, p, p + 1, &out->pairs[k]);
+        if (!rc) report(ctx, k + 1, total, &out->pairs[k]);
+    }
+    for (int p = 0; p < n_long && !rc; p++) {
+        if (!use_long[p]) continue;
+        rc = estimate_pair(ctx, p, p + 2, &out->pairs[k]);
+        if (!rc) report(ctx, k + 1, total, &out->pairs[k]);
+        k++;
+    }
+    free(use_long);
+    out->n_pairs = k;
+    for (int j = 0; j < k; j++) {
+        int st = out->pairs[j].status;
+        if (st != SASNAV_OK && st != SASNAV_ERR_NOT_CONVERGED) out->n_failed++;
+        out->seconds_pairs += out->pairs[j].result.seconds;
+    }
+    out->seconds_per_pair = k > 0 ? out->seconds_pairs / k : 0.0;
+    return rc;
+}
+
+/* Centroids from the pair displacements: the chain, or the least squares
+ * over all links when long baselines were estimated. */
+static int solve_centroids(const nav_ctx *ctx, sasnav_navigation *out, sasnav_pose first)
+{
+    int n = out->n_pings, n_chain = n - 1;
+    if (out->n_pairs == n_chain) {
+        sasnav_pose *disp = malloc(sizeof *disp * (size_t)n_chain);
+        if (!disp) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        for (int j = 0; j < n_chain; j++) disp[j] = out->pairs[j].result.displacement;
+        int rc = sasnav_traj_compose(first, disp, n, out->centroids);
+        free(disp);
+        return rc;
+    }
+    sasnav_traj_link *links = malloc(sizeof *links * (size_t)out->n_pairs);
+    if (!links) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    for (int j = 0; j < out->n_pairs; j++) {
+        const sasnav_navigate_pair *np = &out->pairs[j];
+        sasnav_pose s = np->q - np->p == 1 ? ctx->opts->link_sigma : ctx->opts->long_sigma;
+        if (np->status != SASNAV_OK && np->status != SASNAV_ERR_NOT_CONVERGED) {
+            /* A failed pair stands in with its nominal displacement, so that
+             * every ping stays reached, but weighs (almost) nothing. */
+            s = (sasnav_pose){1e4 * s.x, 1e4 * s.y, 1e4 * s.theta};
+        }
+        links[j] = (sasnav_traj_link){np->p, np->q, np->result.displacement, s};
+    }
+    int rc = sasnav_traj_solve(n, first, links, out->n_pairs, NULL, out->centroids,
+                               &out->lsq_iterations);
+    free(links);
+    return rc;
+}
+
+/* Truth-dependent outputs: the true centroids in the estimate's frame, the
+ * estimate in the truth's frame, cumulative and differential errors. */
+static int compare_with_truth(const nav_ctx *ctx, sasnav_navigation *out)
+{
+    const sasnav_run *run = ctx->run;
+    int n = out->n_pings;
+    size_t np = (size_t)n;
+    out->truth_centroids = malloc(sizeof(sasnav_pose) * np);
+    out->anchored = malloc(sizeof(sasnav_ping_pose) * np);
+    out->cumulative = malloc(sizeof(sasnav_pose) * np);
+    out->differential = malloc(sizeof(sasnav_pose) * np);
+    sasnav_pose *true_c = malloc(sizeof(sasnav_pose) * np);
+    sasnav_pose *moved = malloc(sizeof(sasnav_pose) * np);
+    if (!out->truth_centroids || !out->anchored || !out->cumulative || !out->differential ||
+        !true_c || !moved) {
+        free(true_c);
+        free(moved);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    }
+    out->has_truth = 1;
+    int rc = sasnav_traj_centroids(run->truth, n, true_c);
+    /* Gauge: the rigid motion taking the true first centroid onto the
+     * estimated one (and its inverse for the anchored estimate). */
+    sasnav_pose to_est = sasnav_pose_compose(out->centroids[0], sasnav_pose_inverse(true_c[0]));
+    sasnav_pose to_true = sasnav_pose_inverse(to_est);
+    for (int i = 0; i < n; i++) {
+        out->truth_centroids[i] = sasnav_pose_compose(to_est, true_c[i]);
+        moved[i] = sasnav_pose_compose(to_true, out->centroids[i]);
+    }
+    if (!rc) rc = sasnav_traj_ping_poses(moved, n, run->tx_lag, 0.0, out->anchored);
+    if (!rc)
+        rc = sasnav_traj_errors(out->centroids, out->truth_centroids, n, 0.0, out->cumulative,
+                                out->differential);
+    free(true_c);
+    free(moved);
+    if (rc) return rc;
+    out->cumulative[0] = (sasnav_pose){0, 0, 0}; /* exact by construction; drop rounding */
+    sasnav_pose sc = {0, 0, 0}, sd = {0, 0, 0};
+    for (int i = 0; i < n; i++) {
+        sc.x += out->cumulative[i].x * out->cumulative[i].x;
+        sc.y += out->cumulative[i].y * out->cumulative[i].y;
+        sc.theta += out->cumulative[i].theta * out->cumulative[i].theta;
+        sd.x += out->differential[i].x * out->differential[i].x;
+        sd.y += out->differential[i].y * out->differential[i].y;
+        sd.theta += out->differential[i].theta * out->differential[i].theta;
+    }
+    out->rms_cumulative = (sasnav_pose){sqrt(sc.x / n), sqrt(sc.y / n), sqrt(sc.theta / n)};
+    int nd = n - 1;
+    out->rms_differential = (sasnav_pose){sqrt(sd.x / nd), sqrt(sd.y / nd), sqrt(sd.theta / nd)};
+    return SASNAV_OK;
+}
+
+static int navigate(nav_ctx *ctx, sasnav_navigation *out)
+{
+    const sasnav_run *run = ctx->run;
+    int n = run->n_pings;
+    out->centroids = malloc(sizeof(sasnav_pose) * (size_t)n);
+    out->nav = malloc(sizeof(sasnav_ping_pose) * (size_t)n);
+    if (!out->centroids || !out->nav) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    int rc = estimate_all(ctx, out);
+    if (rc) return rc;
+    sasnav_pose first = sasnav_ping_centroid(&run->nav[0]);
+    rc = solve_centroids(ctx, out, first);
+    if (rc) return rc;
+    if (ctx->opts->align) {
+        rc = sasnav_traj_align(out->centroids, n, &out->track_angle);
+        if (rc) return rc;
+    }
+    rc = sasnav_traj_ping_poses(out->centroids, n, run->tx_lag, 0.0, out->nav);
+    if (rc) return rc;
+    if (run->truth) rc = compare_with_truth(ctx, out);
+    return rc;
+}
+
+int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
+                    sasnav_navigation *out)
+{
+    if (!out) return sasnav_set_error(SASNAV_ERR_ARG, "navigate: NULL output");
+    memset(out, 0, sizeof *out);
+    sasnav_navigate_opts defaults;
+    if (!opts) {
+        sasnav_navigate_default_opts(&defaults);
+        opts = &defaults;
+    }
+    int rc = check_input(run, opts);
+    if (rc) return rc;
+    nav_ctx ctx = {run, opts, NULL, now_seconds()};
+    out->method = opts->method;
+    out->n_pings = run->n_pings;
+    if (opts->method == SASNAV_METHOD_SUBSPACE) {
+        sasnav_pair_opts po = opts->pair;
+        po.range = run->range_of_interest;
+        po.tx_lag = run->tx_lag;
+        po.nthreads = opts->nthreads;
+        rc = sasnav_pair_create(&run->sys, &run->array, &run->win, &po, &ctx.estimator);
+        if (rc) return rc;
+    }
+    rc = navigate(&ctx, out);
+    sasnav_pair_destroy(ctx.estimator);
+    out->seconds = now_seconds() - ctx.t0;
+    if (rc) {
+        /* Keep the message of the failure across the frees. */
+        sasnav_navigation_free(out);
+        return rc;
+    }
+    return SASNAV_OK;
+}

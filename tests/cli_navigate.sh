@@ -1,0 +1,82 @@
+#!/bin/sh
+# `sasnav navigate` as a user runs it: simulate a tiny run (3 pings), navigate
+# it with --json (subspace, coarse iterations to keep it short, and DPCA),
+# check the summary's fields and the output file; a missing input file must
+# fail with a message, a non-zero status and no output file.
+# Usage: sh tests/cli_navigate.sh path/to/sasnav
+set -u
+CLI=${1:?usage: cli_navigate.sh path/to/sasnav}
+T=$(mktemp -d "${TMPDIR:-/tmp}/sasnav-cli-navigate-XXXXXX") || exit 1
+trap 'rm -rf "$T"' EXIT INT TERM
+FAILED=0
+fail() {
+    echo "cli_navigate: FAIL: $*" >&2
+    FAILED=1
+}
+
+cat > "$T/tiny.yaml" <<'EOF'
+preset: paper-trajectory
+trajectory: {n_pings: 3, x_start: -0.2, surge_rms: 0.003, sway_rms: 0.003, yaw_rms: 0.003}
+noise: {snr_db: inf}
+EOF
+"$CLI" simulate --config "$T/tiny.yaml" -o "$T/run.h5" 2> "$T/sim.err" ||
+    { cat "$T/sim.err" >&2; fail "simulate"; exit 1; }
+
+# Subspace (the default method), k = 2, i = 1.
+if "$CLI" navigate "$T/run.h5" --k 2 --i 1 --json -o "$T/nav.h5" > "$T/nav.json" 2> "$T/nav.err"; then
+    [ -s "$T/nav.h5" ] || fail "no navigation file written"
+    # stderr is not a terminal here: no progress bar (no carriage return).
+    if tr '\r' '#' < "$T/nav.err" | grep -q '#'; then fail "progress bar drawn on a non-terminal"; fi
+    for key in final_surge_error final_sway_error final_yaw_error rms_sway_error pairs \
+               track_angle seconds seconds_per_pair; do
+        grep -q "\"$key\"" "$T/nav.json" || fail "JSON lacks \"$key\""
+    done
+    if [ -x /usr/bin/python3 ]; then
+        /usr/bin/python3 - "$T/nav.json" <<'EOF' || fail "JSON content (subspace)"
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["method"] == "subspace", d["method"]
+assert len(d["pairs"]) == 2, d["pairs"]
+for p in d["pairs"]:
+    for k in ("p", "q", "surge", "sway", "yaw", "truth", "error", "status"):
+        assert k in p, k
+    for k in ("surge", "sway", "yaw"):
+        assert abs(p["error"][k] - (p[k] - p["truth"][k])) < 1e-9, p
+for k in ("final_surge_error", "final_sway_error", "final_yaw_error", "rms_sway_error",
+          "track_angle", "seconds", "seconds_per_pair"):
+    assert isinstance(d[k], float), (k, d[k])
+# Coarse iterations on a noise-free run: far inside lambda / 10 = 0.5 mm.
+assert abs(d["final_sway_error"]) < 5e-4, d["final_sway_error"]
+assert d["seconds"] > 0 and d["seconds_per_pair"] > 0
+EOF
+    fi
+else
+    cat "$T/nav.err" >&2
+    fail "navigate (subspace) exited non-zero"
+fi
+
+# DPCA, text output.
+"$CLI" navigate "$T/run.h5" --method dpca -o "$T/nav-dpca.h5" > "$T/dpca.txt" 2> "$T/dpca.err" ||
+    { cat "$T/dpca.err" >&2; fail "navigate --method dpca exited non-zero"; }
+grep -q "final cumulative error" "$T/dpca.txt" || fail "DPCA text output lacks the final error"
+[ -s "$T/nav-dpca.h5" ] || fail "no DPCA navigation file"
+
+# The navigation file images the run.
+"$CLI" image "$T/run.h5" --nav "$T/nav-dpca.h5" --grid -0.5,0.5,21,9.5,10.5,21 -o "$T/img.h5" \
+    2> "$T/img.err" || { cat "$T/img.err" >&2; fail "image --nav with the navigate output"; }
+
+# Missing input: non-zero, one message, no output file.
+if "$CLI" navigate "$T/missing.h5" -o "$T/out.h5" > /dev/null 2> "$T/missing.err"; then
+    fail "a missing input file was accepted"
+fi
+grep -q "sasnav navigate: cannot read" "$T/missing.err" || fail "missing input: no clear message"
+[ ! -e "$T/out.h5" ] || fail "missing input: an output file was written"
+ls "$T" | grep -q 'out.h5' && fail "missing input: a temporary output file was left"
+
+# Usage errors.
+"$CLI" navigate "$T/run.h5" --method kalman -o "$T/x.h5" > /dev/null 2>&1 && fail "unknown method accepted"
+"$CLI" navigate "$T/run.h5" > /dev/null 2>&1 && fail "missing -o accepted"
+[ ! -e "$T/x.h5" ] || fail "an output file was written after a usage error"
+
+[ "$FAILED" -eq 0 ] && echo "cli_navigate: ok"
+exit "$FAILED"

@@ -1,0 +1,283 @@
+/* Navigation of a whole run (navigate.h): trajectory recovery with the
+ * subspace estimator and with DPCA on small noise-free simulations, the
+ * least-squares path with long baselines, failed pairs, progress reports,
+ * the consistency of the outputs and bad input. */
+#include "sasnav/error.h"
+#include "sasnav/navigate.h"
+#include "sasnav/sim.h"
+#include "sasnav/trajectory.h"
+#include "testutil.h"
+
+#include <math.h>
+#include <string.h>
+
+#define LAMBDA 0.005 /* m, c / f0 of the paper's system */
+
+/* Tolerances of the subspace trajectory (4 pings, 3 pairs, noise-free,
+ * exact EPCA geometry, small smooth errors of 3 mm / 3 mrad rms). To keep
+ * the test short (it also runs under ASan) the estimator runs its coarse
+ * iterations only, k = 2 and i = 1: a tenth of the cost of k = i = 5 and,
+ * per pair (SPEC 6), still sway errors of <= 0.02 mm, surge errors of
+ * 0.2-1.3 mm (surge is the weak axis: eta is flat along a surge ~ R yaw
+ * valley) and yaw errors of ~1e-4 rad.
+ *  - cumulative sway <= 0.2 mm = lambda / 25, the paper's final figure:
+ *    the sway drift is the sum of the pair sway errors plus each yaw error
+ *    times the distance still to go (1e-4 rad x (0.2 + 0.4 + 0.6) m =
+ *    0.12 mm at worst), so 0.2 mm still catches a sign or frame error (a
+ *    wrong composition moves the last centroid by millimetres);
+ *  - cumulative surge <= 1.5 mm: three pair surge errors of up to ~0.5 mm
+ *    adding up;
+ *  - cumulative yaw <= 1e-3 rad: 3 pairs of ~1e-4 rad with a factor 3 to
+ *    spare, and a third of the simulated yaw errors' 3e-3 rad rms.
+ * Measured: final errors +0.41 mm, +0.007 mm, -1e-4 rad (k = 2, i = 1 on
+ * this 0.6 m range extent); -0.21 mm, -0.005 mm, +9e-6 rad with k = i = 5
+ * on the full 1.6 m grid. */
+#define SUB_SWAY_TOL 0.2e-3
+#define SUB_SURGE_TOL 1.5e-3
+#define SUB_YAW_TOL 1e-3
+/* DPCA without surge: lambda / 10, the SAS imaging requirement (SPEC 5);
+ * its pair sway errors are microns (test_dpca). */
+#define DPCA_SWAY_TOL (LAMBDA / 10)
+
+static int pose_close(sasnav_pose a, sasnav_pose b, double tol)
+{
+    return fabs(a.x - b.x) <= tol && fabs(a.y - b.y) <= tol &&
+           fabs(sasnav_wrap_angle(a.theta - b.theta)) <= tol;
+}
+
+/* paper-trajectory reduced to n pings facing the disc, noise-free, exact
+ * EPCA geometry (true_bistatic 0) and small smooth errors. */
+static sasnav_run *simulate(int n, double spacing, double surge_rms, double sway_rms,
+                            double yaw_rms)
+{
+    sasnav_scenario sc;
+    if (sasnav_scenario_preset("paper-trajectory", &sc)) return NULL;
+    sc.traj.n_pings = n;
+    sc.traj.ping_spacing = spacing;
+    sc.traj.x_start = -0.5 * (n - 1) * spacing;
+    sc.traj.true_bistatic = 0;
+    sc.traj.surge_rms = surge_rms;
+    sc.traj.sway_rms = sway_rms;
+    sc.traj.yaw_rms = yaw_rms;
+    sc.snr_db = INFINITY;
+    sasnav_run *run = NULL;
+    int rc = sasnav_simulate(&sc, NULL, NULL, &run);
+    CHECK(rc == 0, "simulation failed: %s", sasnav_last_error());
+    return rc ? NULL : run;
+}
+
+typedef struct {
+    int calls, last_done, total, monotone, null_first;
+} progress_log;
+
+static void record(const sasnav_navigate_progress *pr, void *user)
+{
+    progress_log *log = user;
+    if (log->calls == 0) log->null_first = pr->done == 0 && pr->result == NULL && pr->p == -1;
+    else if (pr->done != log->last_done + 1 || pr->result == NULL) log->monotone = 0;
+    log->calls++;
+    log->last_done = pr->done;
+    log->total = pr->total;
+}
+
+static void print_errors(const char *label, const sasnav_navigation *nav)
+{
+    for (int i = 0; i < nav->n_pings; i++)
+        printf("  %s ping %d: cumulative error surge %+.4f mm, sway %+.4f mm, yaw %+.2e rad\n",
+               label, i, 1e3 * nav->cumulative[i].x, 1e3 * nav->cumulative[i].y,
+               nav->cumulative[i].theta);
+    printf("  %s: track angle %.3e rad, %.2f s per pair, %.2f s in all\n", label, nav->track_angle,
+           nav->seconds_per_pair, nav->seconds);
+}
+
+/* Properties every navigation output has, whatever its accuracy. */
+static void check_consistency(const sasnav_run *run, const sasnav_navigation *nav)
+{
+    int n = run->n_pings;
+    CHECK(nav->n_pings == n, "n_pings %d", nav->n_pings);
+    int ok = 1;
+    for (int i = 0; i < n; i++) {
+        sasnav_pose c = sasnav_ping_centroid(&nav->nav[i]);
+        ok &= pose_close(c, nav->centroids[i], 1e-12);
+        sasnav_pose a = sasnav_pose_between(nav->nav[i].tx, nav->nav[i].array);
+        ok &= fabs(a.x - run->tx_lag) < 1e-12 && fabs(a.y) < 1e-12;
+    }
+    CHECK(ok, "ping poses are not the EPCA geometry at the centroids");
+    sasnav_pose first = sasnav_ping_centroid(&run->nav[0]);
+    CHECK(fabs(nav->centroids[0].x - first.x) < 1e-12 && fabs(nav->centroids[0].y - first.y) < 1e-12,
+          "the trajectory does not start at the nominal first centroid");
+    double angle = 1;
+    CHECK_OK(sasnav_traj_track_angle(nav->centroids, n, &angle));
+    CHECK(fabs(angle) < 1e-9, "aligned trajectory keeps a track angle of %.2e rad", angle);
+    for (int j = 0; j < n - 1; j++) {
+        const sasnav_navigate_pair *np = &nav->pairs[j];
+        CHECK(np->p == j && np->q == j + 1, "pair %d is (%d, %d)", j, np->p, np->q);
+        sasnav_pose d = sasnav_ping_displacement(&run->truth[j], &run->truth[j + 1]);
+        CHECK(fabs(np->truth.y - d.y) < 1e-12 && fabs(np->truth.x - (d.x - run->ping_spacing)) < 1e-12,
+              "pair %d: true motion error wrong", j);
+        CHECK(fabs(np->error.y - (np->result.error.y - np->truth.y)) < 1e-15, "pair %d: error", j);
+    }
+    if (!nav->has_truth) return;
+    CHECK(nav->cumulative[0].x == 0 && nav->cumulative[0].y == 0 && nav->cumulative[0].theta == 0,
+          "cumulative error of the first ping is not 0");
+    /* The anchored estimate starts on the true first centroid. */
+    sasnav_pose a0 = sasnav_ping_centroid(&nav->anchored[0]);
+    sasnav_pose t0 = sasnav_ping_centroid(&run->truth[0]);
+    CHECK(pose_close(a0, t0, 1e-12), "anchored navigation does not start on the truth");
+    /* The truth moved onto the estimate keeps its own displacements. */
+    sasnav_pose t_last = sasnav_ping_centroid(&run->truth[n - 1]);
+    sasnav_pose between_true = sasnav_pose_between(t0, t_last);
+    sasnav_pose between_moved = sasnav_pose_between(nav->truth_centroids[0], nav->truth_centroids[n - 1]);
+    CHECK(pose_close(between_true, between_moved, 1e-12), "moved truth is not rigid");
+}
+
+static void test_subspace(void)
+{
+    sasnav_run *run = simulate(4, 0.20, 3e-3, 3e-3, 3e-3);
+    if (!run) return;
+    sasnav_navigate_opts o;
+    sasnav_navigate_default_opts(&o);
+    o.pair.k = o.pair.coarse_k;
+    o.pair.i = o.pair.coarse_i;
+    o.pair.range_extent = 0.6; /* m, instead of 1.6: cost / 2.7, same texture */
+    progress_log log = {0, 0, 0, 1, 0};
+    o.progress = record;
+    o.progress_user = &log;
+    sasnav_navigation nav;
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    if (nav.n_pings == run->n_pings) {
+        print_errors("subspace", &nav);
+        for (int j = 0; j < nav.n_pairs; j++)
+            printf("  pair %d-%d: error surge %+.4f mm, sway %+.5f mm, yaw %+.2e rad (status %d)\n",
+                   nav.pairs[j].p, nav.pairs[j].q, 1e3 * nav.pairs[j].error.x,
+                   1e3 * nav.pairs[j].error.y, nav.pairs[j].error.theta, nav.pairs[j].status);
+        CHECK(nav.n_pairs == 3 && nav.n_failed == 0, "%d pairs, %d failed", nav.n_pairs, nav.n_failed);
+        CHECK(nav.has_truth, "truth not used");
+        check_consistency(run, &nav);
+        sasnav_pose f = nav.cumulative[3];
+        CHECK(fabs(f.y) <= SUB_SWAY_TOL, "final sway error %.4f mm", 1e3 * f.y);
+        CHECK(fabs(f.x) <= SUB_SURGE_TOL, "final surge error %.4f mm", 1e3 * f.x);
+        CHECK(fabs(f.theta) <= SUB_YAW_TOL, "final yaw error %.2e rad", f.theta);
+        for (int i = 0; i < 4; i++)
+            CHECK(fabs(nav.cumulative[i].y) <= SUB_SWAY_TOL, "ping %d sway error %.4f mm", i,
+                  1e3 * nav.cumulative[i].y);
+        CHECK(log.null_first && log.monotone && log.calls == 4 && log.last_done == 3 && log.total == 3,
+              "progress: %d calls, last done %d of %d", log.calls, log.last_done, log.total);
+        CHECK(nav.seconds > 0 && nav.seconds_per_pair > 0 && nav.seconds_pairs <= nav.seconds,
+              "timings %.3f %.3f %.3f", nav.seconds, nav.seconds_pairs, nav.seconds_per_pair);
+        /* paper-trajectory's 20 cm spacing leaves (p, p + 2) no common phase
+         * centre: long baselines are skipped, not failed (checked on the
+         * DPCA run below, where it costs nothing). */
+    }
+    sasnav_navigation_free(&nav);
+    CHECK(nav.pairs == NULL && nav.nav == NULL, "free does not zero");
+    sasnav_navigation_free(&nav); /* twice is harmless */
+    sasnav_run_free(run);
+}
+
+static void test_dpca(void)
+{
+    /* Zero surge: DPCA's model (surge not observable) holds. */
+    sasnav_run *run = simulate(6, 0.20, 0.0, 3e-3, 3e-3);
+    if (!run) return;
+    sasnav_navigate_opts o;
+    sasnav_navigate_default_opts(&o);
+    o.method = SASNAV_METHOD_DPCA;
+    sasnav_navigation nav;
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    if (nav.n_pings == run->n_pings) {
+        print_errors("DPCA", &nav);
+        check_consistency(run, &nav);
+        CHECK(nav.n_failed == 0, "%d DPCA pairs failed", nav.n_failed);
+        for (int i = 0; i < nav.n_pings; i++)
+            CHECK(fabs(nav.cumulative[i].y) <= DPCA_SWAY_TOL, "DPCA ping %d sway error %.4f mm", i,
+                  1e3 * nav.cumulative[i].y);
+    }
+    sasnav_navigation_free(&nav);
+
+    /* 20 cm spacing: (p, p + 2) shares no phase centre and is skipped. */
+    o.long_baselines = 1;
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    CHECK(nav.n_pairs == 5 && nav.n_skipped == 4 && nav.lsq_iterations == 0,
+          "long baselines at 20 cm: %d pairs, %d skipped", nav.n_pairs, nav.n_skipped);
+    sasnav_navigation_free(&nav);
+    sasnav_run_free(run);
+
+    /* 10 cm spacing: 12 phase centres shared by consecutive pings, 8 by
+     * (p, p + 2); all links combined by least squares. */
+    run = simulate(6, 0.10, 0.0, 3e-3, 3e-3);
+    if (!run) return;
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    if (nav.n_pings == run->n_pings) {
+        print_errors("DPCA, long baselines", &nav);
+        CHECK(nav.n_pairs == 9 && nav.n_skipped == 0 && nav.n_failed == 0 && nav.lsq_iterations > 0,
+              "%d pairs, %d skipped, %d failed, %d iterations", nav.n_pairs, nav.n_skipped,
+              nav.n_failed, nav.lsq_iterations);
+        CHECK(nav.pairs[5].p == 0 && nav.pairs[5].q == 2, "first long baseline is (%d, %d)",
+              nav.pairs[5].p, nav.pairs[5].q);
+        check_consistency(run, &nav);
+        for (int i = 0; i < nav.n_pings; i++)
+            CHECK(fabs(nav.cumulative[i].y) <= DPCA_SWAY_TOL, "ping %d sway error %.4f mm", i,
+                  1e3 * nav.cumulative[i].y);
+    }
+    sasnav_navigation_free(&nav);
+    sasnav_run_free(run);
+}
+
+/* Every DPCA pair refused (the nominal shift is not a whole number of
+ * phase centres): the navigation goes on with the nominal displacements. */
+static void test_failed_pairs(void)
+{
+    sasnav_run *run = simulate(3, 0.20, 0.0, 3e-3, 3e-3);
+    if (!run) return;
+    run->ping_spacing = 0.21;
+    sasnav_navigate_opts o;
+    sasnav_navigate_default_opts(&o);
+    o.method = SASNAV_METHOD_DPCA;
+    sasnav_navigation nav;
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    CHECK(nav.n_failed == 2 && nav.pairs && nav.pairs[0].status == SASNAV_ERR_ARG,
+          "failed pairs: %d", nav.n_failed);
+    if (nav.centroids) {
+        sasnav_pose nominal[3];
+        sasnav_traj_centroids(run->nav, 3, nominal);
+        int ok = 1;
+        for (int i = 0; i < 3; i++) ok &= pose_close(nav.centroids[i], nominal[i], 1e-12);
+        CHECK(ok, "failed pairs do not fall back to the nominal trajectory");
+    }
+    sasnav_navigation_free(&nav);
+    sasnav_run_free(run);
+}
+
+static void test_bad_input(void)
+{
+    sasnav_run *run = simulate(2, 0.20, 0.0, 0.0, 0.0);
+    if (!run) return;
+    sasnav_navigate_opts o;
+    sasnav_navigate_default_opts(&o);
+    sasnav_navigation nav;
+    CHECK(sasnav_navigate(NULL, &o, &nav) == SASNAV_ERR_ARG, "NULL run accepted");
+    CHECK(sasnav_navigate(run, &o, NULL) == SASNAV_ERR_ARG, "NULL output accepted");
+    o.method = (sasnav_method)7;
+    CHECK(sasnav_navigate(run, &o, &nav) == SASNAV_ERR_ARG, "unknown method accepted");
+    CHECK(nav.pairs == NULL && nav.nav == NULL, "output not empty after a failure");
+    sasnav_navigate_default_opts(&o);
+    o.link_sigma.y = 0;
+    CHECK(sasnav_navigate(run, &o, &nav) == SASNAV_ERR_ARG, "zero link sigma accepted");
+    sasnav_navigate_default_opts(&o);
+    run->n_pings = 1;
+    CHECK(sasnav_navigate(run, &o, &nav) == SASNAV_ERR_ARG, "one-ping run accepted");
+    run->n_pings = 2;
+    run->nav[1].array.x = NAN;
+    CHECK(sasnav_navigate(run, &o, &nav) != SASNAV_OK, "non-finite navigation accepted");
+    sasnav_run_free(run);
+}
+
+int main(void)
+{
+    test_bad_input();
+    test_failed_pairs();
+    test_dpca();
+    test_subspace();
+    return test_summary("test_navigate");
+}
