@@ -1,16 +1,14 @@
 #!/bin/sh
 # Installs the dependencies, builds sasnav and runs the main job on the
-# built-in default scenario: simulate paper-trajectory and image it.
-# Results in out/. Usage: sh scripts/run-demo.sh   (as root on Debian)
+# built-in default scenario: `sasnav demo` simulates paper-trajectory,
+# navigates it with the subspace estimator and with DPCA, images it with the
+# nominal, true and estimated navigations and writes out/report.md.
+# Usage: sh scripts/run-demo.sh   (as root on Debian; a few minutes)
 set -eu
 cd "$(dirname "$0")/.."
 sh scripts/install-deps.sh
 JOBS=$(nproc 2>/dev/null || echo 2)
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j"$JOBS"
-mkdir -p out
-./build/sasnav simulate --preset paper-trajectory -o out/run.h5
-./build/sasnav image out/run.h5 -o out/image-nominal.h5 --png out/image-nominal.png
-./build/sasnav image out/run.h5 --truth -o out/image-true.h5 --png out/image-true.png
-./build/sasnav pair out/run.h5 --p 7 --q 8
-echo "results in $(pwd)/out"
+./build/sasnav demo -o out
+echo "results in $(pwd)/out (start with out/report.md)"
