@@ -28,5 +28,7 @@ int cmd_cuts(int argc, char **argv);
 int cmd_ingest(int argc, char **argv);
 int cmd_navigate(int argc, char **argv);
 int cmd_demo(int argc, char **argv);
+int cmd_tank(int argc, char **argv);
+int cmd_ingest_wav(const char *dir, int decimation, const char *output);
 
 #endif

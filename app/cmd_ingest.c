@@ -20,6 +20,9 @@ static const char *help =
     "  sasnav image run.h5 --grid -0.3,0.3,400,-0.3,0.3,400 -o img.h5 --png img.png\n"
     "\n"
     "  --airsas DIR        recording directory\n"
+    "  --wav DIR           tank-style recordings: ping_NNN.wav (multichannel,\n"
+    "                      passband), chirp.wav, positions.csv [, truth.csv]\n"
+    "                      (as written by 'sasnav tank'); decimation default 33\n"
     "  --background DIR    empty-scene recording, subtracted ping by ping\n"
     "  --mic N             microphone (column) 1 or 2 (default 1)\n"
     "  --first N           first ping, 0-based (default 0)\n"
@@ -57,8 +60,9 @@ int cmd_ingest(int argc, char **argv)
         {"bandwidth", required_argument, 0, 'B'},  {"no-room", no_argument, 0, 'R'},
         {"radius", required_argument, 0, 'r'},     {"clip-run", required_argument, 0, 'c'},
         {"output", required_argument, 0, 'o'},     {"help", no_argument, 0, 'h'},
-        {0, 0, 0, 0}};
-    const char *dir = NULL, *bgdir = NULL, *output = NULL;
+        {"wav", required_argument, 0, 'w'},        {0, 0, 0, 0}};
+    const char *dir = NULL, *bgdir = NULL, *output = NULL, *wavdir = NULL;
+    int decimation_given = 0;
     sasnav_airsas_opts o;
     sasnav_airsas_default_opts(&o);
     long v;
@@ -92,7 +96,9 @@ int cmd_ingest(int argc, char **argv)
             if (cli_parse_int(optarg, 1, 1000000, &v))
                 return cli_fail("ingest", 0, "--decimation needs an integer >= 1");
             o.decimation = (int)v;
+            decimation_given = 1;
             break;
+        case 'w': wavdir = optarg; break;
         case 'M': o.compression = SASNAV_COMPRESS_MATCHED; break;
         case 'T':
             if (parse_taper(optarg, &o.taper))
@@ -127,7 +133,11 @@ int cmd_ingest(int argc, char **argv)
     if (optind != argc)
         return cli_fail("ingest", 0, "unexpected argument '%s' (inputs are given with --airsas)",
                         argv[optind]);
-    if (!dir) return cli_fail("ingest", 0, "an input is required (--airsas DIR)");
+    if (wavdir) {
+        if (!output) return cli_fail("ingest", 0, "an output file is required (-o run.h5)");
+        return cmd_ingest_wav(wavdir, decimation_given ? o.decimation : 0, output);
+    }
+    if (!dir) return cli_fail("ingest", 0, "an input is required (--airsas DIR or --wav DIR)");
     if (!output) return cli_fail("ingest", 0, "an output file is required (-o run.h5)");
 
     sasnav_airsas *rec = NULL, *bg = NULL;

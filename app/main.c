@@ -15,7 +15,8 @@ static const char *usage =
     "  image      backproject a run into an image (HDF5 and PNG)\n"
     "  pair       estimate the motion error between two pings\n"
     "  cuts       error-function cuts and maps around a point (CSV + PNG)\n"
-    "  ingest     real recordings (AirSAS) to a run: pulse compression, baseband\n"
+    "  ingest     real recordings (AirSAS, WAV) to a run: pulse compression, baseband\n"
+    "  tank       simulate the paper's tank experiment as passband WAV recordings\n"
     "  navigate   estimate the trajectory of a whole run (subspace or DPCA)\n"
     "  demo       paper-trajectory end to end: navigation, images, report\n"
     "\n"
@@ -34,6 +35,7 @@ static const command commands[] = {
     {"ingest", cmd_ingest},
     {"navigate", cmd_navigate},
     {"demo", cmd_demo},
+    {"tank", cmd_tank},
 };
 
 int main(int argc, char **argv)
