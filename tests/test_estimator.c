@@ -23,10 +23,19 @@ static sasnav_run *simulate(sasnav_pose err, uint64_t seed)
     return run;
 }
 
+/* In sanitized builds (about 20x slower) the estimates use k = i = 2 and
+ * only the sanitizer's findings and coarse bounds are checked. */
+#ifdef SASNAV_TEST_SANITIZED
+static const int reduced = 1;
+#else
+static const int reduced = 0;
+#endif
+
 static sasnav_pair *make_pair(const sasnav_run *run)
 {
     sasnav_pair_opts po;
     sasnav_pair_default_opts(&po);
+    if (reduced) po.k = po.i = 2;
     po.range = run->range_of_interest;
     po.tx_lag = run->tx_lag;
     sasnav_pair *pair = NULL;
@@ -47,9 +56,12 @@ static void check_recovery(sasnav_pose truth, uint64_t seed)
     if (pair) {
         CHECK_OK(sasnav_pair_estimate(pair, &r));
         CHECK(r.status == SASNAV_OK, "status %d", r.status);
-        CHECK(fabs(r.error.x - truth.x) <= 5e-4, "surge error %.3f mm", 1e3 * (r.error.x - truth.x));
-        CHECK(fabs(r.error.y - truth.y) <= 2e-4, "sway error %.4f mm", 1e3 * (r.error.y - truth.y));
-        CHECK(fabs(r.error.theta - truth.theta) <= 5e-4, "yaw error %.2e rad", r.error.theta - truth.theta);
+        /* Reduced (k = i = 2) runs: surge 2 mm, sway lambda/10, yaw 2e-3
+         * (the coarse iterations' accuracy, SPEC 6: 0.2-1.3 mm surge). */
+        double bs = reduced ? 2e-3 : 5e-4, bw = reduced ? 5e-4 : 2e-4, by = reduced ? 2e-3 : 5e-4;
+        CHECK(fabs(r.error.x - truth.x) <= bs, "surge error %.3f mm", 1e3 * (r.error.x - truth.x));
+        CHECK(fabs(r.error.y - truth.y) <= bw, "sway error %.4f mm", 1e3 * (r.error.y - truth.y));
+        CHECK(fabs(r.error.theta - truth.theta) <= by, "yaw error %.2e rad", r.error.theta - truth.theta);
         printf("truth (%.2f mm, %.2f mm, %.4f rad): error (%.3f mm, %.4f mm, %.1e rad), %d evaluations\n",
                1e3 * truth.x, 1e3 * truth.y, truth.theta, 1e3 * (r.error.x - truth.x),
                1e3 * (r.error.y - truth.y), r.error.theta - truth.theta, r.evaluations);
@@ -141,7 +153,7 @@ static void check_error_functions(void)
 int main(void)
 {
     check_error_functions();
-    check_recovery((sasnav_pose){-0.0345, 0.0217, 0.041}, 1);  /* the paper's case */
-    check_recovery((sasnav_pose){0.0281, -0.0143, -0.0322}, 9); /* another draw */
+    check_recovery((sasnav_pose){-0.0345, 0.0217, 0.041}, 1); /* the paper's case */
+    if (!reduced) check_recovery((sasnav_pose){0.0281, -0.0143, -0.0322}, 9); /* another draw */
     return test_summary("test_estimator");
 }
