@@ -27,6 +27,8 @@ static const char *help =
     "                    final stage (default 8, 8; the paper used 5, 5)\n"
     "  --prior S,W,Y     prior motion error (default 0,0,0)\n"
     "  --no-global       skip the global stage (local search from the prior)\n"
+    "  --box S,W,Y       half-widths of the search box around the prior (m, m,\n"
+    "                    rad; default 0.06, 0.035 and the grating-lobe-safe yaw)\n"
     "  --range R         centre range of the estimation grid (default: the run's\n"
     "                    range of interest)\n"
     "  --subintervals N  split the swath into N range sub-intervals, each with\n"
@@ -61,11 +63,11 @@ int cmd_pair(int argc, char **argv)
         {"i", required_argument, 0, 'i'},     {"prior", required_argument, 0, 'r'},
         {"no-global", no_argument, 0, 'G'},   {"subintervals", required_argument, 0, 'S'},
         {"range", required_argument, 0, 'R'}, {"threads", required_argument, 0, 't'},
-        {"lag-model", required_argument, 0, 'L'},
+        {"lag-model", required_argument, 0, 'L'}, {"box", required_argument, 0, 'b'},
         {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
     long p = 0, q = 1, k = 8, iters = 8, nsub = 1, threads = 0;
     int json = 0, no_global = 0, have_p = 0, have_q = 0, motion_lag = 0;
-    double prior[3] = {0, 0, 0}, range = NAN;
+    double prior[3] = {0, 0, 0}, range = NAN, box[3] = {NAN, NAN, NAN};
     int opt;
     optind = 1;
     while ((opt = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
@@ -77,6 +79,10 @@ int cmd_pair(int argc, char **argv)
         case 'i': if (cli_parse_int(optarg, 1, 100, &iters)) return cli_fail("pair", 0, "--i needs 1..100"); break;
         case 'r': if (cli_parse_doubles(optarg, 3, prior)) return cli_fail("pair", 0, "--prior needs SURGE,SWAY,YAW"); break;
         case 'G': no_global = 1; break;
+        case 'b':
+            if (cli_parse_doubles(optarg, 3, box) || !(box[0] > 0 && box[1] > 0 && box[2] > 0))
+                return cli_fail("pair", 0, "--box needs three positive half-widths S,W,Y");
+            break;
         case 'S': if (cli_parse_int(optarg, 1, 64, &nsub)) return cli_fail("pair", 0, "--subintervals needs 1..64"); break;
         case 'R': if (cli_parse_double(optarg, &range) || !(range > 0)) return cli_fail("pair", 0, "--range needs a positive number"); break;
         case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_fail("pair", 0, "--threads needs 0..1024"); break;
@@ -124,6 +130,7 @@ int cmd_pair(int argc, char **argv)
     po.i = (int)iters;
     po.prior = (sasnav_pose){prior[0], prior[1], prior[2]};
     po.global_stage = !no_global;
+    if (!isnan(box[0])) po.box = (sasnav_pose){box[0], box[1], box[2]};
     po.nthreads = (int)threads;
     double extent = po.range_extent;
     int failed = 0;
