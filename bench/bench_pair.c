@@ -2,7 +2,7 @@
  *
  * usage: bench_pair [--draws N] [--seed S] [--snr DB|inf] [--threads T]
  *                   [--k K] [--i I] [--cross M] [--error-extent M]
- *                   [--error-taper M] [--paper-only]
+ *                   [--error-taper M] [--tolerance T] [--paper-only]
  * Prints, for the paper's case and N random motion errors drawn uniformly
  * in surge +-4 cm, sway +-2.5 cm, yaw +-4e-2 rad (seeded): the truth, the
  * zeta-stage and final estimates, their errors, evaluations, operator
@@ -71,6 +71,7 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[a], "--cross") && a + 1 < argc) po.cross_extent = atof(argv[++a]);
         else if (!strcmp(argv[a], "--error-extent") && a + 1 < argc) po.error_extent = atof(argv[++a]);
         else if (!strcmp(argv[a], "--error-taper") && a + 1 < argc) po.error_taper = atof(argv[++a]);
+        else if (!strcmp(argv[a], "--tolerance") && a + 1 < argc) po.op.tolerance = atof(argv[++a]);
         else if (!strcmp(argv[a], "--paper-only")) paper_only = 1;
         else {
             fprintf(stderr, "usage: bench_pair [--draws N] [--seed S] [--snr DB|inf] [--threads T] [--k K] [--i I] [--paper-only]\n");
