@@ -168,9 +168,19 @@ static int maps_of_preset(const char *preset, int n, sasnav_pair_opts *po, const
             rc = sasnav_simulate(&sc, scene, &po->op, &run);
             sasnav_pair *pair = NULL;
             if (!rc) rc = sasnav_pair_create(&run->sys, &run->array, &run->win, po, &pair);
-            if (!rc) rc = sasnav_pair_set_data(pair, sasnav_run_ping(run, 0), sasnav_run_ping(run, 1),
-                                               (sasnav_pose){sc.traj.ping_spacing, 0, 0});
-            for (int ih = 0; ih < n && !rc; ih++) {
+            int same = 0;
+            if (!rc) {
+                rc = sasnav_pair_set_data(pair, sasnav_run_ping(run, 0), sasnav_run_ping(run, 1),
+                                          (sasnav_pose){sc.traj.ping_spacing, 0, 0});
+                /* A true error of -spacing puts q exactly on p: the pair is
+                 * undefined there (NaN row), as it is for any estimator. */
+                if (rc == SASNAV_ERR_ARG && fabs(sc.traj.ping_spacing + err.x) < 1e-12) {
+                    same = 1;
+                    rc = SASNAV_OK;
+                    for (int ih = 0; ih < n; ih++) f_z[it * n + ih] = f_e[it * n + ih] = NAN;
+                }
+            }
+            for (int ih = 0; ih < n && !rc && !same; ih++) {
                 sasnav_pose hyp = {0, 0, 0};
                 *pose_comp(&hyp, a) = spans[a] * (2.0 * ih / (n - 1) - 1.0);
                 rc = sasnav_pair_eval(pair, hyp, 1, 0, &f_z[it * n + ih], &f_e[it * n + ih], NULL);

@@ -92,6 +92,30 @@ expect_fail "image file as run" "$T/i4.h5" "$SASNAV" image "$T/img.h5" -o "$T/i4
 expect_fail "bad grid" "$T/i5.h5" "$SASNAV" image "$T/run.h5" --grid 1,0,10,9,10,10 -o "$T/i5.h5"
 expect_fail "output in missing dir" "$T/nodir/i6.h5" "$SASNAV" image "$T/run.h5" -o "$T/nodir/i6.h5"
 
+# The pair estimator and the cuts on the paper's pair (coarse iterations to
+# keep the sanitized run short): JSON fields present, values finite, the
+# estimate within 2 mm / lambda/10 / 2e-3 rad of the truth at k = i = 2.
+expect_ok "simulate paper-pair" "$SASNAV" simulate --preset paper-pair -o "$T/pair.h5"
+if "$SASNAV" pair "$T/pair.h5" --json --k 2 --i 2 >"$T/pair.json" 2>"$T/pair.err"; then
+    if /usr/bin/python3 - "$T/pair.json" <<'PY'
+import json, math, sys
+d = json.load(open(sys.argv[1]))
+for k in ("surge", "sway", "yaw", "truth", "zeta_stage", "evaluations", "status"):
+    assert k in d, "missing field " + k
+t = d["truth"]
+assert d["status"] == "converged", d["status"]
+assert abs(d["surge"] - t["surge"]) < 2e-3 and abs(d["sway"] - t["sway"]) < 5e-4 and abs(d["yaw"] - t["yaw"]) < 2e-3, d
+print("ok   pair --json: error (%.3f mm, %.4f mm, %.1e rad)" % (1e3 * (d["surge"] - t["surge"]), 1e3 * (d["sway"] - t["sway"]), d["yaw"] - t["yaw"]))
+PY
+    then :; else echo "FAIL pair --json content"; fails=$((fails + 1)); fi
+else
+    echo "FAIL pair --json: $(cat "$T/pair.err")"; fails=$((fails + 1))
+fi
+expect_ok "cuts" "$SASNAV" cuts "$T/pair.h5" --n 5 --k 2 --i 1 -o "$T/cuts"
+for f in cut_surge.csv cut_sway.csv cut_yaw.csv cut_surge.png cut_sway.png cut_yaw.png; do
+    [ -s "$T/cuts/$f" ] || { echo "FAIL cuts: $f missing"; fails=$((fails + 1)); }
+done
+
 # Pair estimation refusals: same ping twice, ping out of range.
 expect_fail "pair same ping" "" "$SASNAV" pair "$T/run.h5" --p 1 --q 1
 expect_fail "pair out of range" "" "$SASNAV" pair "$T/run.h5" --p 0 --q 7
