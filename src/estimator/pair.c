@@ -66,9 +66,12 @@ static void level_free(pair_level *lv)
     free(lv->mod_q);
     free(lv->blur_tmp);
     free(lv->window);
-    if (lv->xc_fwd_p) fftwf_destroy_plan(lv->xc_fwd_p);
-    if (lv->xc_fwd_q) fftwf_destroy_plan(lv->xc_fwd_q);
-    if (lv->xc_inv) fftwf_destroy_plan(lv->xc_inv);
+#pragma omp critical(sasnav_fftw_planner)
+    {
+        if (lv->xc_fwd_p) fftwf_destroy_plan(lv->xc_fwd_p);
+        if (lv->xc_fwd_q) fftwf_destroy_plan(lv->xc_fwd_q);
+        if (lv->xc_inv) fftwf_destroy_plan(lv->xc_inv);
+    }
     fftwf_free(lv->xc_p);
     fftwf_free(lv->xc_q);
     memset(lv, 0, sizeof *lv);
@@ -115,9 +118,14 @@ static int level_init(sasnav_pair *pr, pair_level *lv, double pixel, int k, int 
     lv->xc_p = fftwf_malloc(sizeof(fftwf_complex) * nxc);
     lv->xc_q = fftwf_malloc(sizeof(fftwf_complex) * nxc);
     if (!lv->xc_p || !lv->xc_q) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for the estimator");
-    lv->xc_fwd_p = fftwf_plan_dft_2d(lv->xc_ny, lv->xc_nx, lv->xc_p, lv->xc_p, FFTW_FORWARD, FFTW_ESTIMATE);
-    lv->xc_fwd_q = fftwf_plan_dft_2d(lv->xc_ny, lv->xc_nx, lv->xc_q, lv->xc_q, FFTW_FORWARD, FFTW_ESTIMATE);
-    lv->xc_inv = fftwf_plan_dft_2d(lv->xc_ny, lv->xc_nx, lv->xc_q, lv->xc_q, FFTW_BACKWARD, FFTW_ESTIMATE);
+    /* The FFTW planner is not re-entrant: same named section as the
+     * operators' planning (src/operators/op.c). */
+#pragma omp critical(sasnav_fftw_planner)
+    {
+        lv->xc_fwd_p = fftwf_plan_dft_2d(lv->xc_ny, lv->xc_nx, lv->xc_p, lv->xc_p, FFTW_FORWARD, FFTW_ESTIMATE);
+        lv->xc_fwd_q = fftwf_plan_dft_2d(lv->xc_ny, lv->xc_nx, lv->xc_q, lv->xc_q, FFTW_FORWARD, FFTW_ESTIMATE);
+        lv->xc_inv = fftwf_plan_dft_2d(lv->xc_ny, lv->xc_nx, lv->xc_q, lv->xc_q, FFTW_BACKWARD, FFTW_ESTIMATE);
+    }
     if (!lv->xc_fwd_p || !lv->xc_fwd_q || !lv->xc_inv)
         return sasnav_set_error(SASNAV_ERR_FFT, "FFTW could not plan the image correlation");
     return SASNAV_OK;
