@@ -6,6 +6,7 @@
 #include "sasnav/io.h"
 #include "sasnav/plot.h"
 #include "sasnav/sim.h"
+#include "io/textfile.h"
 
 #include <errno.h>
 #include <getopt.h>
@@ -44,17 +45,13 @@ static int make_dir(const char *dir)
 static int write_cut(const char *dir, int a, int n, const double *h, const double *z, const double *e,
                      double truth)
 {
-    char path[1024], tmp[1100];
+    char path[1024];
     snprintf(path, sizeof path, "%s/cut_%s.csv", dir, axis_name[a]);
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *f = fopen(tmp, "w");
-    if (!f) return -1;
-    fprintf(f, "%s_%s,zeta,eta\n", axis_name[a], axis_unit[a]);
-    for (int j = 0; j < n; j++) fprintf(f, "%.9g,%.9g,%.9g\n", h[j], z[j], e[j]);
-    if (fclose(f) || rename(tmp, path)) {
-        remove(tmp);
-        return -1;
-    }
+    sasnav_text_out out;
+    if (sasnav_text_open(&out, path)) return -1;
+    fprintf(out.f, "%s_%s,zeta,eta\n", axis_name[a], axis_unit[a]);
+    for (int j = 0; j < n; j++) fprintf(out.f, "%.9g,%.9g,%.9g\n", h[j], z[j], e[j]);
+    if (sasnav_text_commit(&out)) return -1;
     snprintf(path, sizeof path, "%s/cut_%s.png", dir, axis_name[a]);
     const double *xs[2] = {h, h}, *ys[2] = {z, e};
     int ns[2] = {n, n};
@@ -118,18 +115,14 @@ static int cuts_of_run(const char *input, long p, long q, const double *around, 
 static int write_map(const char *dir, int a, const char *fname, int n, const double *t, const double *h,
                      const double *f)
 {
-    char path[1024], tmp[1100];
+    char path[1024];
     snprintf(path, sizeof path, "%s/map_%s_%s.csv", dir, axis_name[a], fname);
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *fp = fopen(tmp, "w");
-    if (!fp) return -1;
-    fprintf(fp, "true_%s,hypothesis_%s,%s\n", axis_name[a], axis_name[a], fname);
+    sasnav_text_out out;
+    if (sasnav_text_open(&out, path)) return -1;
+    fprintf(out.f, "true_%s,hypothesis_%s,%s\n", axis_name[a], axis_name[a], fname);
     for (int it = 0; it < n; it++)
-        for (int ih = 0; ih < n; ih++) fprintf(fp, "%.9g,%.9g,%.9g\n", t[it], h[ih], f[it * n + ih]);
-    if (fclose(fp) || rename(tmp, path)) {
-        remove(tmp);
-        return -1;
-    }
+        for (int ih = 0; ih < n; ih++) fprintf(out.f, "%.9g,%.9g,%.9g\n", t[it], h[ih], f[it * n + ih]);
+    if (sasnav_text_commit(&out)) return -1;
     snprintf(path, sizeof path, "%s/map_%s_%s.png", dir, axis_name[a], fname);
     sasnav_grid g;
     if (sasnav_grid_make(h[0], h[n - 1], n, t[0], t[n - 1], n, &g)) return -1;

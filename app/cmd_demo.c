@@ -8,6 +8,7 @@
 #include "sasnav/plot.h"
 #include "sasnav/sim.h"
 #include "sasnav/trajectory.h"
+#include "io/textfile.h"
 
 #include <errno.h>
 #include <getopt.h>
@@ -257,11 +258,12 @@ static int plot_errors(demo *d)
 
 static int write_report(demo *d)
 {
-    char path[4096], tmp[4200];
+    char path[4096];
     path_in(d, "report.md", path, sizeof path);
-    snprintf(tmp, sizeof tmp, "%s.tmp-%ld", path, (long)getpid());
-    FILE *f = fopen(tmp, "w");
-    if (!f) return cli_fail("demo", 0, "cannot write %s: %s", tmp, strerror(errno));
+    sasnav_text_out out;
+    int rc = sasnav_text_open(&out, path);
+    if (rc) return cli_fail("demo", rc, "cannot write the report");
+    FILE *f = out.f;
     const sasnav_scenario *sc = &d->sc;
     int n = d->run->n_pings;
     double lambda = sc->sys.sound_speed / sc->sys.f0;
@@ -332,12 +334,8 @@ static int write_report(demo *d)
                 d->nav[m].n_pairs, d->nav[m].seconds_per_pair, d->nav[m].seconds);
     fprintf(f, "| %d backprojections | %.2f |\n", N_IMAGES, d->seconds_images);
     fprintf(f, "| whole demo | %.2f |\n", now_seconds() - d->t_start);
-    int bad = ferror(f);
-    if (fclose(f) || bad || rename(tmp, path)) {
-        remove(tmp);
-        return cli_fail("demo", 0, "cannot write %s", path);
-    }
-    return 0;
+    rc = sasnav_text_commit(&out);
+    return rc ? cli_fail("demo", rc, "cannot write the report") : 0;
 }
 
 static void demo_free(demo *d)

@@ -12,6 +12,7 @@
 #include "sasnav/error.h"
 #include "sasnav/geometry.h"
 #include "sasnav/image.h"
+#include "io/textfile.h"
 
 #include <libfyaml.h>
 
@@ -1106,36 +1107,12 @@ int sasnav_config_write(const char *path, const sasnav_scenario *sc)
     double spacing;
     w.uniform = array_is_uniform(&sc->array, &spacing);
 
-    char tmp[4096];
-    int len = snprintf(tmp, sizeof tmp, "%s.tmp-XXXXXX", path);
-    if (len < 0 || (size_t)len >= sizeof tmp)
-        return sasnav_set_error(SASNAV_ERR_ARG, "config_write: path too long");
-    int fd = mkstemp(tmp);
-    if (fd < 0)
-        return sasnav_set_error(SASNAV_ERR_IO, "%s: cannot create: %s", path, strerror(errno));
-    (void)fchmod(fd, 0644);
-    FILE *f = fdopen(fd, "w");
-    if (!f) {
-        close(fd);
-        unlink(tmp);
-        return sasnav_set_error(SASNAV_ERR_IO, "%s: cannot open for writing", path);
-    }
+    sasnav_text_out out;
+    int rc = sasnav_text_open(&out, path);
+    if (rc) return rc;
     c_numeric locale;
     c_numeric_enter(&locale);
-    write_config(f, &w);
+    write_config(out.f, &w);
     c_numeric_leave(&locale);
-    int bad = ferror(f);
-    bad |= fflush(f) != 0;
-    bad |= fclose(f) != 0;
-    if (bad) {
-        unlink(tmp);
-        return sasnav_set_error(SASNAV_ERR_IO, "%s: write error", path);
-    }
-    if (rename(tmp, path) != 0) {
-        int e = errno;
-        unlink(tmp);
-        return sasnav_set_error(SASNAV_ERR_IO, "%s: cannot rename into place: %s", path,
-                                strerror(e));
-    }
-    return SASNAV_OK;
+    return sasnav_text_commit(&out);
 }
