@@ -14,7 +14,9 @@
 
 static const char *help =
     "usage: sasnav navigate run.h5 [--method subspace|dpca] [--long-baselines]\n"
-    "                       [--k K] [--i I] [--threads N] [--json] -o nav.h5\n"
+    "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--cross-extent M]\n"
+    "                       [--threads N] [--json]\n"
+    "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
     "\n"
     "Estimates the displacement of every consecutive ping pair, composes them\n"
     "into a trajectory starting at the run's nominal first ping, aligns it to\n"
@@ -32,6 +34,17 @@ static const char *help =
     "  --k K, --i I      CGLS and alternating-projection iterations of the\n"
     "                    subspace estimator's final stage (default: the\n"
     "                    estimator's, see 'sasnav pair --help')\n"
+    "  --yaw-sigma S     prior on each pair's yaw error, rad (gyro or rail;\n"
+    "                    default none): resolves the surge-yaw ambiguity of\n"
+    "                    compact scenes (see 'sasnav pair --help')\n"
+    "  --cross-extent M  along-track extent of the estimation grid (see\n"
+    "                    'sasnav pair --help')\n"
+    "  --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)\n"
+    "  --first-pose X,Y,YAW  place the trajectory so that the first ping's PCA\n"
+    "                    centroid is at this world pose (an external fix:\n"
+    "                    GNSS, USBL); default: the run's nominal first ping\n"
+    "  --anchor-truth    the same with the run's true first pose (simulations:\n"
+    "                    the written navigation then images on the truth's grid)\n"
     "  --threads N       OpenMP threads (default: all cores)\n"
     "  --json            machine-readable summary on stdout\n"
     "  -o FILE           output navigation file (HDF5)\n"
@@ -161,13 +174,17 @@ int cmd_navigate(int argc, char **argv)
         {"method", required_argument, 0, 'm'}, {"long-baselines", no_argument, 0, 'L'},
         {"k", required_argument, 0, 'k'},      {"i", required_argument, 0, 'i'},
         {"threads", required_argument, 0, 't'}, {"json", no_argument, 0, 'j'},
+        {"yaw-sigma", required_argument, 0, 'y'}, {"first-pose", required_argument, 0, 'f'},
+        {"anchor-truth", no_argument, 0, 'A'}, {"fix-yaw", no_argument, 0, 'F'},
+        {"cross-extent", required_argument, 0, 'X'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
     sasnav_navigate_default_opts(&no);
     const char *output = NULL;
     long threads = 0, k = no.pair.k, iters = no.pair.i;
-    int json = 0, opt;
+    int json = 0, opt, anchor_truth = 0, have_first = 0;
+    double first[3] = {0, 0, 0};
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         switch (opt) {
@@ -187,6 +204,20 @@ int cmd_navigate(int argc, char **argv)
             if (cli_parse_int(optarg, 0, 1024, &threads))
                 return cli_fail("navigate", 0, "--threads needs an integer 0..1024");
             break;
+        case 'y':
+            if (cli_parse_double(optarg, &no.pair.yaw_sigma) || !(no.pair.yaw_sigma >= 0))
+                return cli_fail("navigate", 0, "--yaw-sigma needs a standard deviation >= 0 (rad)");
+            break;
+        case 'f':
+            if (cli_parse_doubles(optarg, 3, first)) return cli_fail("navigate", 0, "--first-pose needs X,Y,YAW");
+            have_first = 1;
+            break;
+        case 'A': anchor_truth = 1; break;
+        case 'F': no.pair.fix_yaw = 1; break;
+        case 'X':
+            if (cli_parse_double(optarg, &no.pair.cross_extent) || !(no.pair.cross_extent > 0))
+                return cli_fail("navigate", 0, "--cross-extent needs a positive length (m)");
+            break;
         case 'j': json = 1; break;
         case 'o': output = optarg; break;
         case 'h': fputs(help, stdout); return 0;
@@ -195,6 +226,8 @@ int cmd_navigate(int argc, char **argv)
     }
     if (optind != argc - 1) return cli_fail("navigate", 0, "exactly one input run file is required");
     if (!output) return cli_fail("navigate", 0, "an output file is required (-o nav.h5)");
+    if (have_first && anchor_truth)
+        return cli_fail("navigate", 0, "--first-pose and --anchor-truth exclude each other");
     const char *input = argv[optind];
     no.pair.k = (int)k;
     no.pair.i = (int)iters;
@@ -207,13 +240,27 @@ int cmd_navigate(int argc, char **argv)
     sasnav_run *run = NULL;
     int rc = sasnav_run_read(input, &run);
     if (rc) return cli_fail("navigate", rc, "cannot read %s", input);
+    if (anchor_truth && !run->truth) {
+        sasnav_run_free(run);
+        return cli_fail("navigate", 0, "--anchor-truth: %s holds no ground truth", input);
+    }
     sasnav_navigation nav;
     rc = sasnav_navigate(run, &no, &nav);
     if (rc) {
         sasnav_run_free(run);
         return cli_fail("navigate", rc, "navigation of %s failed", input);
     }
-    rc = sasnav_nav_write(output, nav.n_pings, nav.nav, run->truth);
+    const sasnav_ping_pose *written = anchor_truth ? nav.anchored : nav.nav;
+    if (have_first) {
+        /* Rigid motion taking the estimated first centroid onto the fix. */
+        sasnav_pose fix = {first[0], first[1], first[2]};
+        sasnav_pose move = sasnav_pose_compose(fix, sasnav_pose_inverse(nav.centroids[0]));
+        for (int i = 0; i < nav.n_pings; i++) {
+            nav.nav[i].tx = sasnav_pose_compose(move, nav.nav[i].tx);
+            nav.nav[i].array = sasnav_pose_compose(move, nav.nav[i].array);
+        }
+    }
+    rc = sasnav_nav_write(output, nav.n_pings, written, run->truth);
     sasnav_run_free(run);
     if (rc) {
         sasnav_navigation_free(&nav);

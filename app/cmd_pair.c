@@ -13,7 +13,8 @@
 
 static const char *help =
     "usage: sasnav pair run.h5 [--p I --q J] [--json] [--k K] [--i I]\n"
-    "                   [--prior S,W,Y] [--no-global] [--subintervals N]\n"
+    "                   [--prior S,W,Y] [--yaw-sigma S | --fix-yaw] [--cross-extent M]\n"
+    "                   [--no-global] [--subintervals N]\n"
     "                   [--range R] [--lag-model fixed|motion] [--threads N]\n"
     "\n"
     "Estimates the motion error (displacement minus nominal) of ping q relative\n"
@@ -64,10 +65,12 @@ int cmd_pair(int argc, char **argv)
         {"no-global", no_argument, 0, 'G'},   {"subintervals", required_argument, 0, 'S'},
         {"range", required_argument, 0, 'R'}, {"threads", required_argument, 0, 't'},
         {"lag-model", required_argument, 0, 'L'}, {"box", required_argument, 0, 'b'},
+        {"yaw-sigma", required_argument, 0, 'y'}, {"fix-yaw", no_argument, 0, 'F'},
+        {"cross-extent", required_argument, 0, 'X'},
         {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
     long p = 0, q = 1, k = 8, iters = 8, nsub = 1, threads = 0;
-    int json = 0, no_global = 0, have_p = 0, have_q = 0, motion_lag = 0;
-    double prior[3] = {0, 0, 0}, range = NAN, box[3] = {NAN, NAN, NAN};
+    int json = 0, no_global = 0, have_p = 0, have_q = 0, motion_lag = 0, fix_yaw = 0;
+    double prior[3] = {0, 0, 0}, range = NAN, box[3] = {NAN, NAN, NAN}, yaw_sigma = 0, cross_extent = 0;
     int opt;
     optind = 1;
     while ((opt = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
@@ -82,6 +85,15 @@ int cmd_pair(int argc, char **argv)
         case 'b':
             if (cli_parse_doubles(optarg, 3, box) || !(box[0] > 0 && box[1] > 0 && box[2] > 0))
                 return cli_fail("pair", 0, "--box needs three positive half-widths S,W,Y");
+            break;
+        case 'F': fix_yaw = 1; break;
+        case 'X':
+            if (cli_parse_double(optarg, &cross_extent) || !(cross_extent > 0))
+                return cli_fail("pair", 0, "--cross-extent needs a positive length (m)");
+            break;
+        case 'y':
+            if (cli_parse_double(optarg, &yaw_sigma) || !(yaw_sigma >= 0))
+                return cli_fail("pair", 0, "--yaw-sigma needs a standard deviation >= 0 (rad)");
             break;
         case 'S': if (cli_parse_int(optarg, 1, 64, &nsub)) return cli_fail("pair", 0, "--subintervals needs 1..64"); break;
         case 'R': if (cli_parse_double(optarg, &range) || !(range > 0)) return cli_fail("pair", 0, "--range needs a positive number"); break;
@@ -132,6 +144,9 @@ int cmd_pair(int argc, char **argv)
     po.global_stage = !no_global;
     if (!isnan(box[0])) po.box = (sasnav_pose){box[0], box[1], box[2]};
     po.nthreads = (int)threads;
+    po.yaw_sigma = yaw_sigma;
+    po.fix_yaw = fix_yaw;
+    if (cross_extent > 0) po.cross_extent = cross_extent;
     double extent = po.range_extent;
     int failed = 0;
     for (int s = 0; s < nsub; s++) {
@@ -190,6 +205,7 @@ int cmd_pair(int argc, char **argv)
         json_object_set_new(root, "zeta", json_real(r0->zeta));
         json_object_set_new(root, "eta", json_real(r0->eta));
         json_object_set_new(root, "overlap", json_real(r0->overlap));
+        json_object_set_new(root, "ambiguity", json_real(r0->ambiguity));
         json_object_set_new(root, "evaluations", json_integer(r0->evaluations));
         json_object_set_new(root, "evaluations_global", json_integer(r0->evaluations_global));
         json_object_set_new(root, "evaluations_zeta", json_integer(r0->evaluations_zeta));
@@ -234,6 +250,9 @@ int cmd_pair(int argc, char **argv)
         }
         printf("displacement   x %.6f m   y %.6f m   theta %.6e rad\n", r->displacement.x, r->displacement.y,
                r->displacement.theta);
+        if (r->ambiguity > 0.8)
+            printf("ambiguity %.2f: the second surge-yaw candidate of the valley is nearly as good "
+                   "(compact scene? consider --yaw-sigma)\n", r->ambiguity);
         printf("zeta %.4g  eta %.4g  overlap %.3g  evaluations %d (global %d, zeta %d, eta %d)  "
                "operator applications %ld  %.2f s  status %s\n",
                r->zeta, r->eta, r->overlap, r->evaluations, r->evaluations_global, r->evaluations_zeta,

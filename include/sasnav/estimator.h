@@ -64,6 +64,17 @@ typedef struct {
                               (default 0.06 m, 0.035 m and, for yaw, 0 = auto:
                               90 % of lambda / (4 d), d the phase-centre
                               spacing, i.e. 0.045 rad in paper-pair) */
+    double yaw_sigma;      /* rad, standard deviation of a prior on the yaw
+                              error (e.g. a gyro's, or a rail's), 0 = none
+                              (default). Resolves the surge-yaw ambiguity
+                              of compact scenes (docs/estimator.md): points
+                              of the valley one phase-centre spacing d of
+                              surge and d / R of yaw apart look alike when
+                              the scene spans little range. */
+    int fix_yaw;           /* 1: hold the yaw error at prior.theta and estimate
+                              surge and sway only (a rail or plotter, or a
+                              gyro far better than the scene's yaw
+                              information; default 0) */
     sasnav_pose grid_step; /* steps of the global grid (default 0.01 m, 0.01 m, 0.01 rad) */
     int global_stage;      /* 1 (default): run the global stage; 0: local only */
     double error_extent;   /* m, along-track extent over which zeta and eta
@@ -89,6 +100,11 @@ typedef struct {
     sasnav_pose zeta_stage;    /* motion error after the zeta stage */
     double zeta, eta;          /* error-function values at the stage minima */
     double overlap;            /* ||psi_p|| / ||rho_p|| at the estimate */
+    double ambiguity;          /* global stage: zeta of the valley scan's lowest
+                                  local minimum over its second lowest (near
+                                  1: the data hardly tell the surge-yaw
+                                  candidates apart, docs/estimator.md; 0: a
+                                  single minimum or no global stage) */
     int evaluations;           /* total error-function evaluations */
     int evaluations_global, evaluations_zeta, evaluations_eta;
     long applications;         /* total operator applications (T or T^H) */

@@ -196,7 +196,8 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
     if (o->k < 1 || o->i < 1 || o->coarse_k < 1 || o->coarse_i < 1 || !(o->range > 0) ||
         !(o->range_extent > 0) || !(o->cross_extent >= 0) || !(o->tx_lag >= 0) ||
         !isfinite(o->range + o->range_extent + o->cross_extent + o->tx_lag + o->blur) ||
-        !(o->blur >= 0) || !(o->box.x >= 0 && o->box.y >= 0 && o->box.theta >= 0)) {
+        !(o->blur >= 0) || !(o->yaw_sigma >= 0) || !isfinite(o->yaw_sigma) ||
+        !(o->box.x >= 0 && o->box.y >= 0 && o->box.theta >= 0)) {
         free(pr);
         return sasnav_set_error(SASNAV_ERR_ARG, "invalid estimator options");
     }

@@ -19,9 +19,15 @@
 #include <string.h>
 #include <time.h>
 
+#ifndef SCAN_LEVEL
+#define SCAN_LEVEL 1
+#endif
+#define HW10 ((sasnav_pose){10.0, 10.0, 10.0})
+
 typedef struct {
     sasnav_pair *pr;
     int level, blurred, use_eta;
+    int ndim;               /* 3, or 2 with the yaw held (opts.fix_yaw) */
     sasnav_pose centre, scale;
     int rc;
     int evals;
@@ -30,7 +36,7 @@ typedef struct {
 static sasnav_pose from_unit(const stage_ctx *c, const double *u)
 {
     sasnav_pose e = {c->centre.x + c->scale.x * u[0], c->centre.y + c->scale.y * u[1],
-                     c->centre.theta + c->scale.theta * u[2]};
+                     c->centre.theta + (c->ndim > 2 ? c->scale.theta * u[2] : 0.0)};
     return e;
 }
 
@@ -52,17 +58,18 @@ static double stage_objective(unsigned n, const double *u, double *grad, void *d
 }
 
 /* Bounded local minimisation in units scaled so that one unit = one step;
- * bounds +-half_width steps around the start. */
-static int local_stage(stage_ctx *c, sasnav_pose start, sasnav_pose step, double half_width,
+ * bounds +-hw steps around the start (per axis). */
+static int local_stage(stage_ctx *c, sasnav_pose start, sasnav_pose step, sasnav_pose hw,
                        double xtol_units, int max_evals, sasnav_pose *best, double *fbest)
 {
     c->centre = start;
     c->scale = step;
     c->evals = 0;
     c->rc = 0;
-    nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, 3);
+    c->ndim = sasnav_pair_options(c->pr)->fix_yaw ? 2 : 3;
+    nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, (unsigned)c->ndim);
     if (!opt) return sasnav_set_error(SASNAV_ERR_NOMEM, "NLopt could not create an optimiser");
-    double lb[3] = {-half_width, -half_width, -half_width}, ub[3] = {half_width, half_width, half_width};
+    double lb[3] = {-hw.x, -hw.y, -hw.theta}, ub[3] = {hw.x, hw.y, hw.theta};
     double dx[3] = {0.5, 0.5, 0.5}, u[3] = {0, 0, 0};
     nlopt_set_lower_bounds(opt, lb);
     nlopt_set_upper_bounds(opt, ub);
@@ -100,7 +107,8 @@ static sasnav_pose valley_point(const sasnav_pair *pr, sasnav_pose hyp_disp, dou
     return e;
 }
 
-static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, int *evals)
+static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, int *evals,
+                        double *ambiguity)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
     const pair_level *lv = &pr->level[0];
@@ -121,30 +129,74 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     }
     sasnav_pose hd = {pr->nominal.x + hyp.x, pr->nominal.y + hyp.y, pr->nominal.theta + hyp.theta};
     if ((rc = pair_image_shift(pr, 0, hyp, &sx, &sy))) return rc;
-    /* Scan the valley in yaw steps that move the scene by one phase-centre
-     * spacing at the grid's range. */
-    double step = pc_spacing / o->range;
-    int nt = (int)ceil(b.theta / step);
-    double fbest = HUGE_VAL;
-    sasnav_pose arg = hyp;
+    /* Scan the valley (with the yaw held: its single point at the prior
+     * yaw) in yaw steps that move the scene by half a
+     * phase-centre spacing at the grid's range: the valley's ambiguous
+     * minima (one spacing of surge, spacing / R of yaw apart) are then
+     * sampled at least twice per period whatever the prior. */
+    double step = 0.5 * pc_spacing / o->range;
+    int nt = o->fix_yaw ? 0 : (int)ceil(b.theta / step);
+    if (nt > 2000) nt = 2000;
+    int ns = 2 * nt + 1;
+    double *zs = malloc(sizeof(double) * (size_t)ns);
+    sasnav_pose *es = malloc(sizeof(sasnav_pose) * (size_t)ns);
+    if (!zs || !es) {
+        free(zs);
+        free(es);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the valley scan");
+    }
     for (int it = -nt; it <= nt; it++) {
-        double theta_t = pr->nominal.theta + c.theta + it * b.theta / nt;
+        double theta_t = pr->nominal.theta + c.theta + (nt > 0 ? it * b.theta / nt : 0.0);
         sasnav_pose e = valley_point(pr, hd, zx, zy, sx, sy, theta_t);
+        zs[it + nt] = HUGE_VAL;
+        es[it + nt] = e;
         if (fabs(e.x - c.x) > b.x || fabs(e.y - c.y) > b.y) continue;
         double z;
-        if ((rc = sasnav_pair_eval(pr, e, 0, 0, &z, NULL, NULL))) return rc;
+        if ((rc = sasnav_pair_eval(pr, e, SCAN_LEVEL, 0, &z, NULL, NULL))) {
+            free(zs);
+            free(es);
+            return rc;
+        }
         n++;
-        if (z < fbest) {
-            fbest = z;
-            arg = e;
+        zs[it + nt] = z;
+    }
+    /* The scan's local minima are the candidates; with a yaw prior each is
+     * weighted by 1 + (yaw offset / sigma)^2. The ratio of the two lowest
+     * minima measures how well the data alone resolve the valley. */
+    double fbest = HUGE_VAL, sbest = HUGE_VAL, z1 = HUGE_VAL, z2 = HUGE_VAL;
+    sasnav_pose arg = hyp;
+    for (int j = 0; j < ns; j++) {
+        if (!(zs[j] < HUGE_VAL)) continue;
+        if ((j > 0 && zs[j - 1] < zs[j]) || (j + 1 < ns && zs[j + 1] <= zs[j])) continue;
+        double score = zs[j];
+        if (o->yaw_sigma > 0) {
+            double u = (es[j].theta - c.theta) / o->yaw_sigma;
+            score *= 1.0 + u * u;
+        }
+        if (score < sbest) {
+            sbest = score;
+            fbest = zs[j];
+            arg = es[j];
+        }
+        if (zs[j] < z1) {
+            z2 = z1;
+            z1 = zs[j];
+        } else if (zs[j] < z2) {
+            z2 = zs[j];
         }
     }
+    free(zs);
+    free(es);
+    *ambiguity = z2 < HUGE_VAL && z2 > 0 ? z1 / z2 : 0.0;
     /* Local refinement of zeta at level 0 around the best valley point. */
     stage_ctx ctx = {.pr = pr, .level = 0};
     sasnav_pose unit = {pc_spacing, pc_spacing, pc_spacing / o->range};
     sasnav_pose refined;
     double fr;
-    rc = local_stage(&ctx, arg, unit, 2.0, 0.02, o->max_evaluations, &refined, &fr);
+    /* Bounds: 2 units in sway, half a unit along surge and yaw so that the
+     * refinement stays with the chosen candidate of the valley. */
+    sasnav_pose hw = {0.5, 2.0, 0.5};
+    rc = local_stage(&ctx, arg, unit, hw, 0.02, o->max_evaluations, &refined, &fr);
     n += ctx.evals;
     if (rc && rc != SASNAV_ERR_NOT_CONVERGED) return rc;
     *best = fr < fbest ? refined : arg;
@@ -189,7 +241,7 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     sasnav_pose start = o->prior;
     int nglob = 0;
     if (o->global_stage) {
-        rc = global_stage(pr, pc_spacing, &start, &nglob);
+        rc = global_stage(pr, pc_spacing, &start, &nglob, &res->ambiguity);
         if (rc) return rc;
     }
     res->global_stage = start;
@@ -202,7 +254,7 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     sasnav_pose zstep = {0.2 * pc_spacing, 0.2 * pc_spacing, 0.2 * pc_spacing / range};
     sasnav_pose zbest;
     double zval;
-    int zrc = local_stage(&ctx, start, zstep, 10.0, 0.01, o->max_evaluations, &zbest, &zval);
+    int zrc = local_stage(&ctx, start, zstep, HW10, 0.01, o->max_evaluations, &zbest, &zval);
     res->evaluations_zeta = ctx.evals;
     if (zrc && zrc != SASNAV_ERR_NOT_CONVERGED) return zrc;
     res->zeta_stage = zbest;
@@ -230,7 +282,7 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
         }
         sasnav_pose b;
         double f;
-        int r = local_stage(&ctx, s0, estep, 10.0, 0.01, o->max_evaluations, &b, &f);
+        int r = local_stage(&ctx, s0, estep, HW10, 0.01, o->max_evaluations, &b, &f);
         nevals += ctx.evals;
         if (r && r != SASNAV_ERR_NOT_CONVERGED) return r;
         if (f < fbest) {
@@ -247,7 +299,7 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
         sasnav_pose fstep = {estep.x / 2, estep.y / 2, estep.theta / 2};
         sasnav_pose b;
         double f;
-        erc = local_stage(&ctx, best, fstep, 10.0, 0.05, o->max_evaluations, &b, &f);
+        erc = local_stage(&ctx, best, fstep, HW10, 0.05, o->max_evaluations, &b, &f);
         nevals += ctx.evals;
         if (erc && erc != SASNAV_ERR_NOT_CONVERGED) return erc;
         best = b;
