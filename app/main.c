@@ -19,6 +19,7 @@ static const char *usage =
     "  tank       simulate the paper's tank experiment as passband WAV recordings\n"
     "  navigate   estimate the trajectory of a whole run (subspace or DPCA)\n"
     "  demo       paper-trajectory end to end: navigation, images, report\n"
+    "  validate   the tank experiment's validation (K sub-sampled runs, SISO/SIMO)\n"
     "\n"
     "Run 'sasnav COMMAND --help' for the options of a command.\n";
 
@@ -36,6 +37,7 @@ static const command commands[] = {
     {"navigate", cmd_navigate},
     {"demo", cmd_demo},
     {"tank", cmd_tank},
+    {"validate", cmd_validate},
 };
 
 int main(int argc, char **argv)

@@ -36,6 +36,14 @@ sasnav_cfloat *sasnav_run_ping(const sasnav_run *run, int p);
 /* Validates shapes and values (finite navigation, finite samples). */
 int sasnav_run_check(const sasnav_run *run);
 
+/* A new run holding pings[0..n_pings-1] of `run` (in that order) and, when
+ * `channels` is not NULL, only channels[0..n_channels-1] (the array keeps
+ * those receivers' positions); navigation, truth and the run's constants
+ * are carried over (ping_spacing scaled to the mean index step). Free with
+ * sasnav_run_free. Errors: indices out of range, no ping, no channel. */
+int sasnav_run_subset(const sasnav_run *run, const int *pings, int n_pings, const int *channels,
+                      int n_channels, sasnav_run **out);
+
 /* Safe on NULL. */
 void sasnav_run_free(sasnav_run *run);
 

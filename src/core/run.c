@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* Number of samples of a run, with overflow check (0 on overflow). */
 static size_t run_sample_count(int n_pings, int n_rx, int n_samples)
@@ -124,4 +125,48 @@ void sasnav_run_free(sasnav_run *run)
     free(run->nav);
     free(run->truth);
     free(run);
+}
+
+int sasnav_run_subset(const sasnav_run *run, const int *pings, int n_pings, const int *channels,
+                      int n_channels, sasnav_run **out)
+{
+    if (!out) return sasnav_set_error(SASNAV_ERR_ARG, "subset output pointer is NULL");
+    *out = NULL;
+    if (!run || !pings || n_pings < 1)
+        return sasnav_set_error(SASNAV_ERR_ARG, "subset needs a run and at least one ping");
+    int nc = channels ? n_channels : run->array.n_rx;
+    if (nc < 1 || nc > run->array.n_rx)
+        return sasnav_set_error(SASNAV_ERR_ARG, "subset of %d channels from %d", nc, run->array.n_rx);
+    for (int i = 0; i < n_pings; i++)
+        if (pings[i] < 0 || pings[i] >= run->n_pings)
+            return sasnav_set_error(SASNAV_ERR_ARG, "subset ping %d outside 0..%d", pings[i],
+                                    run->n_pings - 1);
+    for (int l = 0; channels && l < nc; l++)
+        if (channels[l] < 0 || channels[l] >= run->array.n_rx)
+            return sasnav_set_error(SASNAV_ERR_ARG, "subset channel %d outside 0..%d", channels[l],
+                                    run->array.n_rx - 1);
+    sasnav_array a = run->array;
+    a.n_rx = nc;
+    for (int l = 0; l < nc; l++) a.rx_u[l] = run->array.rx_u[channels ? channels[l] : l];
+    sasnav_run *r = NULL;
+    int rc = sasnav_run_alloc(&run->sys, &a, &run->win, n_pings, run->truth != NULL, &r);
+    if (rc) return rc;
+    size_t ns = (size_t)run->win.n_samples;
+    for (int i = 0; i < n_pings; i++) {
+        const sasnav_cfloat *src = sasnav_run_ping(run, pings[i]);
+        sasnav_cfloat *dst = sasnav_run_ping(r, i);
+        for (int l = 0; l < nc; l++)
+            memcpy(dst + (size_t)l * ns, src + (size_t)(channels ? channels[l] : l) * ns,
+                   sizeof(sasnav_cfloat) * ns);
+        r->nav[i] = run->nav[pings[i]];
+        if (run->truth) r->truth[i] = run->truth[pings[i]];
+    }
+    r->ping_spacing = n_pings > 1 ? run->ping_spacing * fabs((double)(pings[n_pings - 1] - pings[0])) /
+                                        (n_pings - 1)
+                                  : run->ping_spacing;
+    r->speed = run->speed;
+    r->tx_lag = run->tx_lag;
+    r->range_of_interest = run->range_of_interest;
+    *out = r;
+    return SASNAV_OK;
 }

@@ -1,0 +1,346 @@
+/* sasnav validate: the tank experiment's validation method (paper Sec. V,
+ * include/sasnav/validate.h). */
+#include "cli.h"
+#include "io/textfile.h"
+#include "sasnav/io.h"
+#include "sasnav/plot.h"
+#include "sasnav/validate.h"
+
+#include <errno.h>
+#include <getopt.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static const char *help =
+    "usage: sasnav validate run.h5 -o DIR [--k-min K] [--k-max K]\n"
+    "                       [--fix-yaw | --yaw-sigma S] [--k K] [--i I]\n"
+    "                       [--grid X0,X1,NX,Y0,Y1,NY] [--threads N] [--json]\n"
+    "\n"
+    "The validation method of the paper's tank experiment (Sec. V): from a run\n"
+    "whose pings step by whole phase-centre spacings (the tank: K = 7 of 8\n"
+    "phase centres shared), builds the sub-sampled runs with K = k-min..k-max\n"
+    "shared phase centres and all their phases, navigates each, combines the\n"
+    "phases into one trajectory per K, rotates each by its fitted track angle,\n"
+    "re-arranges the data into SISO (one receiver, all pings) and SIMO (every\n"
+    "N-th ping, all receivers) apertures, images each with each trajectory and\n"
+    "measures how well the complex images agree around the reflectors.\n"
+    "Writes into DIR:\n"
+    "  validate.json       the summary (also on stdout with --json)\n"
+    "  trajectories.csv    ping, K, along-track, cross-track, yaw (aligned)\n"
+    "  trajectories.png    along/cross-track deviation from the mean of the K\n"
+    "  correlation.csv     pairwise image correlations (navigated images)\n"
+    "  siso_J.png, simo_J.png   images with the largest K's trajectory\n"
+    "  nominal_siso_0.png, nominal_simo_0.png   the same, nominal navigation\n"
+    "  report.md           tables and figures\n"
+    "\n"
+    "  --k-min K, --k-max K  overlaps to test (default 4 .. the run's own)\n"
+    "  --fix-yaw          hold every pair's yaw error at 0 (rail, plotter)\n"
+    "  --yaw-sigma S      prior on the pair yaw error (rad; default none)\n"
+    "  --k K, --i I       estimator iterations of the final stage (default 8, 8)\n"
+    "  --grid ...         image grid (default: the track's extent x range of\n"
+    "                     interest +-0.35 m, 5 mm pixels)\n"
+    "  --threads N        OpenMP threads (default: all cores)\n"
+    "  --json             print the summary on stdout\n";
+
+static json_t *num(double v) { return isfinite(v) ? json_real(v) : json_null(); }
+
+static void join(char *buf, size_t n, const char *dir, const char *name)
+{
+    snprintf(buf, n, "%s/%s", dir, name);
+}
+
+static json_t *summary(const char *input, const sasnav_validation *v)
+{
+    json_t *root = json_object();
+    json_object_set_new(root, "input", json_string(input));
+    json_object_set_new(root, "n_pings", json_integer(v->n_pings));
+    json_object_set_new(root, "has_truth", json_boolean(v->has_truth));
+    json_object_set_new(root, "surge_jump_error", num(v->surge_jump_error));
+    json_object_set_new(root, "jump_pair", v->jump_p >= 0 ? json_pack("[i,i]", v->jump_p, v->jump_p + 1)
+                                                          : json_null());
+    json_object_set_new(root, "yaw_estimate", num(v->yaw_estimate));
+    json_object_set_new(root, "yaw_error", num(v->yaw_error));
+    json_object_set_new(root, "sway_spread", num(v->sway_spread));
+    json_object_set_new(root, "surge_spread", num(v->surge_spread));
+    json_object_set_new(root, "min_image_correlation", num(v->min_correlation));
+    json_object_set_new(root, "min_image_correlation_siso", num(v->min_correlation_siso));
+    json_object_set_new(root, "min_image_correlation_simo", num(v->min_correlation_simo));
+    json_object_set_new(root, "min_image_correlation_siso_simo", num(v->min_correlation_cross));
+    json_object_set_new(root, "min_image_correlation_nominal", num(v->min_correlation_nominal));
+    json_object_set_new(root, "min_image_correlation_truth", num(v->min_correlation_truth));
+    json_object_set_new(root, "region_pixels", json_integer(v->n_region));
+    json_t *ks = json_array();
+    for (int k = 0; k < v->n_k; k++) {
+        const sasnav_validate_k *vk = &v->k[k];
+        json_t *o = json_object();
+        json_object_set_new(o, "k", json_integer(vk->k));
+        json_object_set_new(o, "stride", json_integer(vk->stride));
+        json_object_set_new(o, "pairs", json_integer(vk->n_pairs));
+        json_object_set_new(o, "failed_pairs", json_integer(vk->n_failed));
+        json_object_set_new(o, "track_angle", num(vk->track_angle));
+        if (v->has_truth)
+            json_object_set_new(o, "rms_error", json_pack("{s:f,s:f,s:f}", "surge", vk->rms_error.x, "sway",
+                                                          vk->rms_error.y, "yaw", vk->rms_error.theta));
+        json_object_set_new(o, "seconds", num(vk->seconds));
+        json_array_append_new(ks, o);
+    }
+    json_object_set_new(root, "trajectories", ks);
+    json_object_set_new(root, "seconds", num(v->seconds));
+    return root;
+}
+
+static int write_text(const char *path, const char *text)
+{
+    sasnav_text_out out;
+    int rc = sasnav_text_open(&out, path);
+    if (rc) return rc;
+    fputs(text, out.f);
+    return sasnav_text_commit(&out);
+}
+
+static int write_tables(const char *dir, const sasnav_validation *v)
+{
+    char path[4096];
+    sasnav_text_out out;
+    join(path, sizeof path, dir, "trajectories.csv");
+    int rc = sasnav_text_open(&out, path);
+    if (rc) return rc;
+    fprintf(out.f, "ping,k,x,y,yaw\n");
+    for (int k = 0; k < v->n_k; k++)
+        for (int i = 0; i < v->n_pings; i++)
+            fprintf(out.f, "%d,%d,%.9f,%.9f,%.6e\n", i, v->k[k].k, v->k[k].centroids[i].x,
+                    v->k[k].centroids[i].y, v->k[k].centroids[i].theta);
+    if ((rc = sasnav_text_commit(&out))) return rc;
+    join(path, sizeof path, dir, "correlation.csv");
+    if ((rc = sasnav_text_open(&out, path))) return rc;
+    int nn = v->n_k * (v->n_siso + v->n_simo);
+    fprintf(out.f, "image");
+    for (int b = 0; b < nn; b++)
+        fprintf(out.f, ",K%d_%s%d", v->image_k[b], v->image_simo[b] ? "simo" : "siso", v->image_index[b]);
+    fputc('\n', out.f);
+    for (int a = 0; a < nn; a++) {
+        fprintf(out.f, "K%d_%s%d", v->image_k[a], v->image_simo[a] ? "simo" : "siso", v->image_index[a]);
+        for (int b = 0; b < nn; b++) fprintf(out.f, ",%.5f", v->correlation[a * nn + b]);
+        fputc('\n', out.f);
+    }
+    return sasnav_text_commit(&out);
+}
+
+/* Along- and cross-track deviation of each K's trajectory from the mean of
+ * all K (mm), per ping. */
+static int plot_trajectories(const char *dir, const sasnav_validation *v)
+{
+    int n = v->n_pings, nk = v->n_k, rc = SASNAV_OK;
+    double *x = malloc(sizeof(double) * n), *ys = malloc(sizeof(double) * (size_t)2 * nk * n);
+    const double *xs[2 * SASNAV_VALIDATE_MAX_K], *yv[2 * SASNAV_VALIDATE_MAX_K];
+    int ns[2 * SASNAV_VALIDATE_MAX_K];
+    char lab[SASNAV_VALIDATE_MAX_K][32];
+    const char *labels[SASNAV_VALIDATE_MAX_K];
+    if (!x || !ys) {
+        free(x);
+        free(ys);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    }
+    for (int i = 0; i < n; i++) {
+        x[i] = i;
+        double mx = 0, my = 0;
+        for (int k = 0; k < nk; k++) {
+            mx += v->k[k].centroids[i].x / nk;
+            my += v->k[k].centroids[i].y / nk;
+        }
+        for (int k = 0; k < nk; k++) {
+            ys[(size_t)k * n + i] = 1e3 * (v->k[k].centroids[i].x - mx);
+            ys[(size_t)(nk + k) * n + i] = 1e3 * (v->k[k].centroids[i].y - my);
+        }
+    }
+    for (int k = 0; k < nk; k++) {
+        snprintf(lab[k], sizeof lab[k], "K = %d", v->k[k].k);
+        labels[k] = lab[k];
+        for (int a = 0; a < 2; a++) {
+            xs[a * nk + k] = x;
+            yv[a * nk + k] = ys + (size_t)(a * nk + k) * n;
+            ns[a * nk + k] = n;
+        }
+    }
+    const char *name[2] = {"trajectories_surge.png", "trajectories_sway.png"};
+    const char *title[2] = {"along-track position minus the mean over K",
+                            "cross-track position minus the mean over K"};
+    for (int a = 0; a < 2 && !rc; a++) {
+        char path[4096];
+        join(path, sizeof path, dir, name[a]);
+        sasnav_line_plot lp = {title[a], "ping", a ? "cross-track (mm)" : "along-track (mm)", nk, ns + a * nk,
+                               xs + a * nk, yv + a * nk, labels, 0, NAN, NAN};
+        rc = sasnav_plot_lines(path, &lp);
+    }
+    free(x);
+    free(ys);
+    return rc;
+}
+
+static int plot_images(const char *dir, const sasnav_validation *v)
+{
+    size_t npx = (size_t)v->grid.nx * v->grid.ny;
+    int per = v->n_siso + v->n_simo, rc = SASNAV_OK;
+    for (int j = 0; j < per && !rc; j++) {
+        char name[64], path[4096], title[128];
+        int simo = j >= v->n_siso, idx = simo ? j - v->n_siso : j;
+        snprintf(name, sizeof name, "%s_%d.png", simo ? "simo" : "siso", idx);
+        snprintf(title, sizeof title, "%s %d, K = %d trajectory", simo ? "SIMO set" : "SISO receiver", idx,
+                 v->k[0].k);
+        join(path, sizeof path, dir, name);
+        rc = sasnav_plot_image_db(path, &v->grid, v->images + (size_t)j * npx, 30.0, title);
+    }
+    for (int s = 0; s < 2 && !rc; s++) {
+        char path[4096];
+        int j = v->n_k * per + (s ? v->n_siso : 0);
+        join(path, sizeof path, dir, s ? "nominal_simo_0.png" : "nominal_siso_0.png");
+        rc = sasnav_plot_image_db(path, &v->grid, v->images + (size_t)j * npx, 30.0,
+                                  s ? "SIMO set 0, nominal navigation" : "SISO receiver 0, nominal navigation");
+    }
+    return rc;
+}
+
+static int write_report(const char *dir, const char *input, const sasnav_validation *v, const char *mode)
+{
+    char path[4096];
+    join(path, sizeof path, dir, "report.md");
+    sasnav_text_out out;
+    int rc = sasnav_text_open(&out, path);
+    if (rc) return rc;
+    FILE *f = out.f;
+    fprintf(f, "# sasnav validate: %s\n\n", input);
+    fprintf(f, "Paper Sec. V: %d pings; sub-sampled runs with K = %d..%d shared phase centres, all "
+               "phases, combined per K (phases other than the reference placed by a rigid "
+               "least-squares fit), each rotated by its fitted track angle. Pair yaw: %s.\n\n",
+            v->n_pings, v->k[v->n_k - 1].k, v->k[0].k, mode);
+    fprintf(f, "| K | stride | pairs | failed | track angle (rad) |%s time (s) |\n",
+            v->has_truth ? " rms surge / sway vs truth (mm) |" : "");
+    fprintf(f, "|---|---|---|---|---|%s---|\n", v->has_truth ? "---|" : "");
+    for (int k = 0; k < v->n_k; k++) {
+        const sasnav_validate_k *vk = &v->k[k];
+        fprintf(f, "| %d | %d | %d | %d | %+.4e |", vk->k, vk->stride, vk->n_pairs, vk->n_failed,
+                vk->track_angle);
+        if (v->has_truth) fprintf(f, " %.3f / %.3f |", 1e3 * vk->rms_error.x, 1e3 * vk->rms_error.y);
+        fprintf(f, " %.1f |\n", vk->seconds);
+    }
+    fprintf(f, "\nAgreement of the K trajectories: largest spread %.3f mm along track, %.3f mm across "
+               "(paper: < 5 mm and < 0.5 mm).\n\n",
+            1e3 * v->surge_spread, 1e3 * v->sway_spread);
+    fprintf(f, "Array yaw relative to the track: %.4e rad", v->yaw_estimate);
+    if (v->has_truth)
+        fprintf(f, " (error %+.2e rad); largest surge step (pings %d-%d) error %+.3f mm", v->yaw_error,
+                v->jump_p, v->jump_p + 1, 1e3 * v->surge_jump_error);
+    fprintf(f, ".\n\n");
+    fprintf(f, "Complex image agreement over %d pixels within 12 dB of the peak: minimum correlation "
+               "%.3f over all %d navigated images (SISO-SISO %.3f, SIMO-SIMO %.3f, SISO-SIMO %.3f); "
+               "with the nominal navigation %.3f, with the true navigation %.3f.\n\n",
+            v->n_region, v->min_correlation, v->n_k * (v->n_siso + v->n_simo), v->min_correlation_siso,
+            v->min_correlation_simo, v->min_correlation_cross, v->min_correlation_nominal,
+            v->min_correlation_truth);
+    fprintf(f, "![surge](trajectories_surge.png)\n![sway](trajectories_sway.png)\n\n");
+    fprintf(f, "![SISO 0](siso_0.png) ![SIMO 0](simo_0.png)\n\n");
+    fprintf(f, "![SISO 0 nominal](nominal_siso_0.png) ![SIMO 0 nominal](nominal_simo_0.png)\n");
+    return sasnav_text_commit(&out);
+}
+
+int cmd_validate(int argc, char **argv)
+{
+    static const struct option longopts[] = {
+        {"k-min", required_argument, 0, 'a'}, {"k-max", required_argument, 0, 'b'},
+        {"fix-yaw", no_argument, 0, 'F'},     {"yaw-sigma", required_argument, 0, 'y'},
+        {"k", required_argument, 0, 'k'},     {"i", required_argument, 0, 'i'},
+        {"grid", required_argument, 0, 'g'},  {"threads", required_argument, 0, 't'},
+        {"json", no_argument, 0, 'j'},        {"output", required_argument, 0, 'o'},
+        {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
+    sasnav_validate_opts vo;
+    sasnav_validate_default_opts(&vo);
+    const char *output = NULL;
+    long kmin = vo.k_min, kmax = 0, k = vo.nav.pair.k, iters = vo.nav.pair.i, threads = 0;
+    int json = 0, opt;
+    optind = 1;
+    while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
+        switch (opt) {
+        case 'a': if (cli_parse_int(optarg, 1, 127, &kmin)) return cli_fail("validate", 0, "--k-min needs 1..127"); break;
+        case 'b': if (cli_parse_int(optarg, 1, 127, &kmax)) return cli_fail("validate", 0, "--k-max needs 1..127"); break;
+        case 'F': vo.nav.pair.fix_yaw = 1; break;
+        case 'y':
+            if (cli_parse_double(optarg, &vo.nav.pair.yaw_sigma) || !(vo.nav.pair.yaw_sigma >= 0))
+                return cli_fail("validate", 0, "--yaw-sigma needs a standard deviation >= 0 (rad)");
+            break;
+        case 'k': if (cli_parse_int(optarg, 1, 100, &k)) return cli_fail("validate", 0, "--k needs 1..100"); break;
+        case 'i': if (cli_parse_int(optarg, 1, 100, &iters)) return cli_fail("validate", 0, "--i needs 1..100"); break;
+        case 'g': if (cli_parse_grid(optarg, &vo.grid)) return cli_fail("validate", 0, "--grid needs X0,X1,NX,Y0,Y1,NY"); break;
+        case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_fail("validate", 0, "--threads needs 0..1024"); break;
+        case 'j': json = 1; break;
+        case 'o': output = optarg; break;
+        case 'h': fputs(help, stdout); return 0;
+        default: fputs(help, stderr); return 2;
+        }
+    }
+    if (optind != argc - 1) return cli_fail("validate", 0, "exactly one input run file is required");
+    if (!output) return cli_fail("validate", 0, "an output directory is required (-o DIR)");
+    if (vo.nav.pair.fix_yaw && vo.nav.pair.yaw_sigma > 0)
+        return cli_fail("validate", 0, "--fix-yaw and --yaw-sigma exclude each other");
+    const char *input = argv[optind];
+    vo.k_min = (int)kmin;
+    vo.k_max = (int)kmax;
+    vo.nav.pair.k = (int)k;
+    vo.nav.pair.i = (int)iters;
+    if (vo.nav.pair.coarse_k > vo.nav.pair.k) vo.nav.pair.coarse_k = vo.nav.pair.k;
+    if (vo.nav.pair.coarse_i > vo.nav.pair.i) vo.nav.pair.coarse_i = vo.nav.pair.i;
+    vo.nav.nthreads = (int)threads;
+    vo.op.nthreads = (int)threads;
+
+    sasnav_run *run = NULL;
+    int rc = sasnav_run_read(input, &run);
+    if (rc) return cli_fail("validate", rc, "cannot read %s", input);
+    if (mkdir(output, 0777) && errno != EEXIST) {
+        sasnav_run_free(run);
+        return cli_fail("validate", 0, "cannot create %s: %s", output, strerror(errno));
+    }
+    sasnav_validation v;
+    rc = sasnav_validate(run, &vo, &v);
+    sasnav_run_free(run);
+    if (rc) return cli_fail("validate", rc, "validation of %s failed", input);
+    json_t *root = summary(input, &v);
+    char *text = json_dumps(root, JSON_INDENT(2) | JSON_REAL_PRECISION(10));
+    json_decref(root);
+    char path[4096];
+    join(path, sizeof path, output, "validate.json");
+    const char *mode = vo.nav.pair.fix_yaw ? "held at 0 (--fix-yaw)"
+                       : vo.nav.pair.yaw_sigma > 0 ? "estimated with a prior (--yaw-sigma)" : "estimated";
+    rc = text ? write_text(path, text) : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    if (!rc) rc = write_tables(output, &v);
+    if (!rc) rc = plot_trajectories(output, &v);
+    if (!rc) rc = plot_images(output, &v);
+    if (!rc) rc = write_report(output, input, &v, mode);
+    if (rc) {
+        free(text);
+        sasnav_validation_free(&v);
+        return cli_fail("validate", rc, "cannot write the outputs in %s", output);
+    }
+    if (json) puts(text);
+    else {
+        printf("K trajectories: spread %.3f mm along track, %.3f mm across\n", 1e3 * v.surge_spread,
+               1e3 * v.sway_spread);
+        printf("array yaw relative to the track %.4e rad", v.yaw_estimate);
+        if (v.has_truth)
+            printf(" (error %+.2e); surge jump %d-%d error %+.3f mm", v.yaw_error, v.jump_p, v.jump_p + 1,
+                   1e3 * v.surge_jump_error);
+        printf("\nimage correlation: min %.3f (SISO %.3f, SIMO %.3f, SISO-SIMO %.3f; nominal nav %.3f",
+               v.min_correlation, v.min_correlation_siso, v.min_correlation_simo, v.min_correlation_cross,
+               v.min_correlation_nominal);
+        if (v.has_truth) printf(", true nav %.3f", v.min_correlation_truth);
+        printf(")\n");
+    }
+    fprintf(stderr, "sasnav validate: %d trajectories, %d images, %.1f s -> %s\n", v.n_k, v.n_images,
+            v.seconds, output);
+    free(text);
+    sasnav_validation_free(&v);
+    return 0;
+}
