@@ -13,12 +13,17 @@
 static const char *help =
     "usage: sasnav simulate --preset NAME [--config FILE] [--seed N] [--snr DB]\n"
     "                       [--error SURGE,SWAY,YAW] [--threads N] -o run.h5\n"
+    "       sasnav simulate --preset tank [--seed N] -o DIR\n"
     "\n"
     "Simulates baseband pulse-compressed echoes of a scenario from scatterers\n"
     "placed off any image grid, with the true sensor poses, and writes them with\n"
     "the nominal and true navigation (docs/format.md).\n"
     "\n"
-    "  --preset NAME    paper-pair | paper-trajectory | point (default paper-trajectory)\n"
+    "  --preset NAME    paper-pair | paper-trajectory | point (default\n"
+    "                   paper-trajectory), or tank: the tank experiment as the\n"
+    "                   recordings a user would have (multichannel passband WAV\n"
+    "                   per ping, chirp, positions; 'sasnav tank --help'),\n"
+    "                   written into the directory -o DIR\n"
     "  --config FILE    YAML scenario overriding the preset (docs/config.md)\n"
     "  --seed N         seed of the scene, trajectory and noise draws\n"
     "  --snr DB         signal-to-noise ratio in dB ('inf' = noise-free)\n"
@@ -58,6 +63,18 @@ int cmd_simulate(int argc, char **argv)
     }
     if (optind < argc) return cli_fail("simulate", 0, "unexpected argument '%s'", argv[optind]);
     if (!output) return cli_fail("simulate", 0, "an output file is required (-o run.h5)");
+    if (!strcmp(preset, "tank")) {
+        if (config || snr || error)
+            return cli_fail("simulate", 0, "--preset tank takes only --seed and -o DIR");
+        char *args[5] = {"tank", "-o", (char *)output, NULL, NULL};
+        int na = 3;
+        if (seed) {
+            args[3] = "--seed";
+            args[4] = (char *)seed;
+            na = 5;
+        }
+        return cmd_tank(na, args);
+    }
 
     sasnav_scenario sc;
     int rc = sasnav_scenario_preset(preset, &sc);

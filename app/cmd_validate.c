@@ -299,14 +299,14 @@ int cmd_validate(int argc, char **argv)
     sasnav_run *run = NULL;
     int rc = sasnav_run_read(input, &run);
     if (rc) return cli_fail("validate", rc, "cannot read %s", input);
-    if (mkdir(output, 0777) && errno != EEXIST) {
-        sasnav_run_free(run);
-        return cli_fail("validate", 0, "cannot create %s: %s", output, strerror(errno));
-    }
     sasnav_validation v;
     rc = sasnav_validate(run, &vo, &v);
     sasnav_run_free(run);
     if (rc) return cli_fail("validate", rc, "validation of %s failed", input);
+    if (mkdir(output, 0777) && errno != EEXIST) {
+        sasnav_validation_free(&v);
+        return cli_fail("validate", 0, "cannot create %s: %s", output, strerror(errno));
+    }
     json_t *root = summary(input, &v);
     char *text = json_dumps(root, JSON_INDENT(2) | JSON_REAL_PRECISION(10));
     json_decref(root);

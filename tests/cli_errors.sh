@@ -120,6 +120,15 @@ done
 expect_fail "pair same ping" "" "$SASNAV" pair "$T/run.h5" --p 1 --q 1
 expect_fail "pair out of range" "" "$SASNAV" pair "$T/run.h5" --p 0 --q 7
 
+# Validation and tank refusals.
+expect_fail "validate missing run" "" "$SASNAV" validate "$T/none.h5" -o "$T/val"
+expect_fail "validate no output" "" "$SASNAV" validate "$T/pair.h5"
+expect_fail "validate two yaw models" "" "$SASNAV" validate "$T/pair.h5" --fix-yaw --yaw-sigma 1e-3 -o "$T/val"
+expect_fail "validate K above the run's" "" "$SASNAV" validate "$T/pair.h5" --k-max 12 -o "$T/val"
+expect_fail "tank preset with --snr" "" "$SASNAV" simulate --preset tank --snr 10 -o "$T/tankrec"
+expect_fail "pair negative yaw sigma" "" "$SASNAV" pair "$T/pair.h5" --yaw-sigma -1
+expect_fail "navigate first pose and anchor" "" "$SASNAV" navigate "$T/pair.h5" --first-pose 0,0,0 --anchor-truth -o "$T/nav.h5"
+
 ls "$T" | grep -q 'tmp-' && { echo "FAIL temporary files left: $(ls "$T")"; fails=$((fails + 1)); }
 echo "cli_errors: $fails failures"
 [ "$fails" -eq 0 ]
