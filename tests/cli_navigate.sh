@@ -65,6 +65,31 @@ grep -q "final cumulative error" "$T/dpca.txt" || fail "DPCA text output lacks t
 "$CLI" image "$T/run.h5" --nav "$T/nav-dpca.h5" --grid -0.5,0.5,21,9.5,10.5,21 -o "$T/img.h5" \
     2> "$T/img.err" || { cat "$T/img.err" >&2; fail "image --nav with the navigate output"; }
 
+# Placing the trajectory: --first-pose puts the first centroid at the fix
+# (the array yaw equals the fix's yaw, its position is within the EPCA
+# offset, 5 cm, of it); --anchor-truth puts it on the true first pose (the
+# array yaws of the estimate and the truth written beside it coincide).
+first_array() { # FILE GROUP -> "x y yaw" of ping 0
+    h5dump -d "/$2/array" -s "0,0" -c "1,3" -y -w 0 "$1" 2>/dev/null |
+        sed -n '/DATA {/{n;p;q}' | tr -d ','
+}
+if command -v h5dump > /dev/null 2>&1; then
+    "$CLI" navigate "$T/run.h5" --method dpca --first-pose 1.5,2.5,0.1 -o "$T/nav-fix.h5" > /dev/null 2>&1 ||
+        fail "navigate --first-pose"
+    set -- $(first_array "$T/nav-fix.h5" nav)
+    awk -v x="${1:-nan}" -v y="${2:-nan}" -v t="${3:-nan}" 'BEGIN {
+        exit !((x - 1.5) ^ 2 + (y - 2.5) ^ 2 < 0.05 ^ 2 && (t - 0.1) ^ 2 < 1e-10) }' ||
+        fail "--first-pose: first array pose ($*) not at the fix 1.5,2.5,0.1"
+    "$CLI" navigate "$T/run.h5" --method dpca --anchor-truth -o "$T/nav-anc.h5" > /dev/null 2>&1 ||
+        fail "navigate --anchor-truth"
+    set -- $(first_array "$T/nav-anc.h5" nav) $(first_array "$T/nav-anc.h5" truth)
+    awk -v a="${1:-nan}" -v b="${2:-nan}" -v c="${3:-nan}" -v d="${4:-nan}" -v e="${5:-nan}" -v f="${6:-nan}" \
+        'BEGIN { exit !((a - d) ^ 2 + (b - e) ^ 2 < 1e-6 && (c - f) ^ 2 < 1e-10) }' ||
+        fail "--anchor-truth: first array pose ($1 $2 $3) is not the true one ($4 $5 $6)"
+else
+    echo "cli_navigate: h5dump absent, --first-pose / --anchor-truth checks skipped"
+fi
+
 # Missing input: non-zero, one message, no output file.
 if "$CLI" navigate "$T/missing.h5" -o "$T/out.h5" > /dev/null 2> "$T/missing.err"; then
     fail "a missing input file was accepted"
