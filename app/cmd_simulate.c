@@ -13,7 +13,7 @@
 static const char *help =
     "usage: sasnav simulate --preset NAME [--config FILE] [--seed N] [--snr DB]\n"
     "                       [--error SURGE,SWAY,YAW] [--threads N] -o run.h5\n"
-    "       sasnav simulate --preset tank [--seed N] -o DIR\n"
+    "       sasnav simulate --preset tank [--seed N] [--omni] -o DIR\n"
     "\n"
     "Simulates baseband pulse-compressed echoes of a scenario from scatterers\n"
     "placed off any image grid, with the true sensor poses, and writes them with\n"
@@ -39,11 +39,12 @@ int cmd_simulate(int argc, char **argv)
         {"seed", required_argument, 0, 's'},   {"snr", required_argument, 0, 'n'},
         {"error", required_argument, 0, 'e'},  {"threads", required_argument, 0, 't'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
+        {"omni", no_argument, 0, 'O'},
         {0, 0, 0, 0}};
     const char *preset = "paper-trajectory", *config = NULL, *seed = NULL, *snr = NULL,
                *error = NULL, *output = NULL;
     long threads = 0;
-    int opt;
+    int opt, omni = 0;
     optind = 1;
     while ((opt = getopt_long(argc, argv, "p:c:s:n:e:t:o:h", longopts, NULL)) != -1) {
         switch (opt) {
@@ -57,22 +58,24 @@ int cmd_simulate(int argc, char **argv)
                 return cli_fail("simulate", 0, "--threads needs an integer 0..1024");
             break;
         case 'o': output = optarg; break;
+        case 'O': omni = 1; break;
         case 'h': fputs(help, stdout); return 0;
         default: fputs(help, stderr); return 2;
         }
     }
     if (optind < argc) return cli_fail("simulate", 0, "unexpected argument '%s'", argv[optind]);
     if (!output) return cli_fail("simulate", 0, "an output file is required (-o run.h5)");
+    if (omni && strcmp(preset, "tank")) return cli_fail("simulate", 0, "--omni applies to --preset tank only");
     if (!strcmp(preset, "tank")) {
         if (config || snr || error)
-            return cli_fail("simulate", 0, "--preset tank takes only --seed and -o DIR");
-        char *args[5] = {"tank", "-o", (char *)output, NULL, NULL};
+            return cli_fail("simulate", 0, "--preset tank takes only --seed, --omni and -o DIR");
+        char *args[7] = {"tank", "-o", (char *)output, NULL, NULL, NULL, NULL};
         int na = 3;
         if (seed) {
-            args[3] = "--seed";
-            args[4] = (char *)seed;
-            na = 5;
+            args[na++] = "--seed";
+            args[na++] = (char *)seed;
         }
+        if (omni) args[na++] = "--omni";
         return cmd_tank(na, args);
     }
 

@@ -9,7 +9,7 @@
 int cmd_tank(int argc, char **argv);
 
 static const char *help =
-    "usage: sasnav tank -o DIR [--seed N]\n"
+    "usage: sasnav tank -o DIR [--seed N] [--omni]\n"
     "\n"
     "Simulates the tank experiment of SPEC 4 (8 Rx of 5 cm spaced 5 cm, Tx at\n"
     "the array midpoint, 32 pings at 2.5 cm steps with stepping errors, a surge\n"
@@ -21,15 +21,19 @@ static const char *help =
     "  DIR/chirp.wav        the transmitted chirp (mono)\n"
     "  DIR/positions.csv    ping,x,y,yaw: nominal plotter positions\n"
     "  DIR/truth.csv        ping,x,y,yaw: true poses\n"
+    "  DIR/array.csv        rx_spacing,element_length,directivity (read by ingest)\n"
     "Turn it into a run with\n"
     "  sasnav ingest --wav DIR -o run.h5\n"
     "\n"
     "  --seed N    seed of the stepping errors, clutter and noise (default 1)\n"
+    "  --omni      omnidirectional elements (default: the 5 cm elements'\n"
+    "              line-aperture patterns at 105 kHz)\n"
     "  -o DIR      output directory (created if missing)\n";
 
 int cmd_tank(int argc, char **argv)
 {
     static const struct option longopts[] = {{"seed", required_argument, 0, 's'},
+                                              {"omni", no_argument, 0, 'O'},
                                               {"output", required_argument, 0, 'o'},
                                               {"help", no_argument, 0, 'h'},
                                               {0, 0, 0, 0}};
@@ -46,6 +50,7 @@ int cmd_tank(int argc, char **argv)
                 return cli_fail("tank", 0, "--seed needs a non-negative integer");
             p.seed = (uint64_t)v;
             break;
+        case 'O': p.directivity = 0; break;
         case 'o': output = optarg; break;
         case 'h': fputs(help, stdout); return 0;
         default: fputs(help, stderr); return 2;

@@ -5,12 +5,14 @@
  * - a short simulated tank recording (16 pings, surge jump between pings 7
  *   and 8, constant array yaw 1.27e-2 rad), read through the WAV ingest
  *   chain and validated with K = 7 and 6, the yaw held (a plotter):
- *     the jump located and the array yaw within 2e-3 rad (the issue's
- *     bound); the image bookkeeping (counts, labels);
+ *     the jump's surge within 1 mm, the array yaw within 2e-3 rad and the
+ *     K trajectories within 5 mm / 0.5 mm of each other (the issue's
+ *     bounds); the image bookkeeping (counts, labels);
  *     the correlation matrix symmetric with a unit diagonal and equal, for a
  *     few pairs, to a direct evaluation over the same region (the 12 dB
  *     region recomputed here); the images made with the true navigation
- *     agree (>= 0.8) and better than those made with the nominal one;
+ *     agree better than those made with the nominal one, and the
+ *     navigated ones nearly as well (>= 0.9 x) as the truth's;
  * - refusals: a step that is not a whole number of phase-centre spacings, a
  *   K range outside the run's, one receiver. */
 #include "sasnav/error.h"
@@ -109,10 +111,12 @@ int main(void)
                   v.image_simo[7] == 0 && v.image_simo[8] == 1 && v.image_index[9] == 1,
               "image labels");
         CHECK(v.jump_p == 7, "jump found at pair %d (expected 7-8)", v.jump_p);
-        /* The jump's surge is reported, not bounded here: on this short
-         * 16-ping run the estimator lands one phase-centre spacing off
-         * (docs/validation.md); the 32-ping tank meets 1 mm. */
-        CHECK(isfinite(v.surge_jump_error), "surge jump error not reported");
+        CHECK(fabs(v.surge_jump_error) < 1e-3, "surge jump error %.3g m (bound 1 mm)", v.surge_jump_error);
+        /* The issue's (the paper's) agreement bounds between the K; this
+         * short run keeps the reflectors inside the elements' beams (the
+         * 32-ping run's track ends do not: docs/validation.md). */
+        CHECK(v.surge_spread < 5e-3 && v.sway_spread < 5e-4, "K spreads %.3g / %.3g m (bounds 5 / 0.5 mm)",
+              v.surge_spread, v.sway_spread);
         CHECK(fabs(v.yaw_error) < 2e-3, "array yaw error %.3g rad (bound 2e-3)", v.yaw_error);
         CHECK(isfinite(v.surge_spread) && isfinite(v.sway_spread) && v.surge_spread >= 0, "spreads");
         /* correlation matrix against a direct evaluation */
@@ -142,11 +146,14 @@ int main(void)
         }
         /* With the true navigation the apertures differ only in extent and
          * look angle (16 pings: SISO apertures of 40 cm shifted by up to
-         * 17.5 cm, SIMO sets of 2 pings): measured 0.72; the uncompensated
-         * surge jump and yaw bring the nominal images well below. */
+         * 17.5 cm, SIMO sets of 2 pings): measured 0.81; the uncompensated
+         * surge jump and yaw bring the nominal images well below (0.02).
+         * The estimated trajectories must do nearly as well as the truth. */
         CHECK(v.min_correlation_truth >= 0.6, "true-navigation images agree only to %.3f", v.min_correlation_truth);
         CHECK(v.min_correlation_truth > v.min_correlation_nominal + 0.1, "truth %.3f not above nominal %.3f",
               v.min_correlation_truth, v.min_correlation_nominal);
+        CHECK(v.min_correlation >= 0.9 * v.min_correlation_truth, "navigated images agree to %.3f, truth %.3f",
+              v.min_correlation, v.min_correlation_truth);
         printf("jump error %.3f mm, yaw error %.2e rad, spreads %.2f / %.2f mm, min corr %.3f (truth %.3f, "
                "nominal %.3f)\n", 1e3 * v.surge_jump_error, v.yaw_error, 1e3 * v.surge_spread,
                1e3 * v.sway_spread, v.min_correlation, v.min_correlation_truth, v.min_correlation_nominal);

@@ -20,6 +20,8 @@
  *   chirp.wav         the transmitted chirp (mono, same rate)
  *   positions.csv     "ping,x,y,yaw": the nominal (plotter) positions
  *   truth.csv         "ping,x,y,yaw": the true poses (Tx = array midpoint)
+ *   array.csv         "rx_spacing,element_length,directivity": the sensor
+ *                     (the reader takes it over its options when present)
  * Reader (sasnav_tank_read_dir, `sasnav ingest --wav DIR`): checks every WAV
  * (same channel count and length, sample-rate match with the chirp, not
  * empty, finite, not clipped), runs the ingest chain (include/sasnav/ingest.h)
@@ -57,6 +59,11 @@ typedef struct {
     int n_rx;               /* 8 */
     double rx_spacing;      /* m (0.05) */
     double array_height;    /* m above the plate plane, Tx and Rx (0) */
+    double element_length;  /* m, Tx and Rx apertures (0.05) */
+    int directivity;        /* 1 (default): the elements' line-aperture
+                               patterns sinc(D sin(phi) / lambda0) at the
+                               chirp's centre frequency (the model's, see
+                               docs/model.md) weight every echo; 0: omni */
     /* plotter track */
     int n_pings;            /* 32 */
     double step;            /* m, nominal step along +x (0.025) */
@@ -118,14 +125,16 @@ typedef struct {
     int clip_run;             /* as in sasnav_ingest_opts (3) */
     double rx_spacing;        /* m (0.05); n_rx comes from the WAV files */
     double element_length;    /* m (0.05), Rx and Tx */
+    int directivity;          /* 1 (default): the run's model has the
+                                 elements' beam patterns; 0: omnidirectional */
     double range_of_interest; /* m (1.5) */
 } sasnav_tank_read_opts;
 
 void sasnav_tank_default_read_opts(sasnav_tank_read_opts *o);
 
-/* Reads a recording directory into a run (see above). The run's system is
- * omni (beam_pattern 0), tx_lag 0, speed 0, ping_spacing from the median
- * step of positions.csv. Errors: SASNAV_ERR_IO (missing files),
+/* Reads a recording directory into a run (see above). The run's system has
+ * beam patterns when o->directivity (tx_lag 0, speed 0, ping_spacing from the median
+ * step of positions.csv). Errors: SASNAV_ERR_IO (missing files),
  * SASNAV_ERR_FORMAT (bad WAV/CSV, channel/length/rate mismatch, empty,
  * clipped), SASNAV_ERR_ARG, SASNAV_ERR_NOMEM, SASNAV_ERR_FFT. */
 int sasnav_tank_read_dir(const char *dir, const sasnav_tank_read_opts *o, sasnav_run **run);

@@ -4,6 +4,7 @@
 
 #include "sasnav/error.h"
 #include "sasnav/scene.h"
+#include "io/textfile.h"
 
 #include <errno.h>
 #include <math.h>
@@ -32,6 +33,8 @@ void sasnav_tank_default(sasnav_tank_params *p)
     p->n_rx = 8;
     p->rx_spacing = 0.05;
     p->array_height = 0.0;
+    p->element_length = 0.05;
+    p->directivity = 1;
     p->n_pings = 32;
     p->step = 0.025;
     p->x_start = -0.5 * (p->n_pings - 1) * p->step;
@@ -73,7 +76,8 @@ int sasnav_tank_check(const sasnav_tank_params *p)
     if (!FIN(p->gain) || !FIN(p->noise_std) || p->noise_std < 0)
         return sasnav_set_error(SASNAV_ERR_ARG, "tank: noise std %g", p->noise_std);
     if (p->n_rx < 1 || p->n_rx > SASNAV_MAX_RX || !FIN(p->rx_spacing) || p->rx_spacing < 0 ||
-        !FIN(p->array_height))
+        !FIN(p->array_height) || !FIN(p->element_length) || p->element_length < 0 ||
+        (p->directivity != 0 && p->directivity != 1))
         return sasnav_set_error(SASNAV_ERR_ARG, "tank: array of %d Rx spaced %g", p->n_rx,
                                 p->rx_spacing);
     if (p->n_pings < 1 || p->n_pings > 100000 || !FIN(p->step) || !FIN(p->x_start) ||
@@ -149,6 +153,11 @@ static double chirp_at(const sasnav_lfm *l, double len, double t)
     double cycles = l->f_start * t + 0.5 * rate * t * t;
     cycles -= floor(cycles);
     return env * cos(2.0 * M_PI * cycles);
+}
+
+static double sinc_pi(double a)
+{
+    return fabs(a) < 1e-9 ? 1.0 : sin(M_PI * a) / (M_PI * a);
 }
 
 /* The scene: reflectors then clutter (x, y, amplitude); deterministic. */
@@ -229,6 +238,11 @@ int sasnav_tank_record(const sasnav_tank_params *p, int ping, float *passband,
     if (truth) *truth = pose;
 
     const double fs = p->sample_rate, c = p->sound_speed, len = (nc - 1) / fs, h = p->array_height;
+    /* element patterns at the centre frequency: sinc(D/lambda0 x the
+     * direction's component along the array axis) */
+    const double a_el = p->directivity ? p->element_length * 0.5 * (p->chirp.f_start + p->chirp.f_end) / c : 0.0;
+    const double ca = cos(pose.array.theta), sa = sin(pose.array.theta);
+    const double ct = cos(pose.tx.theta), st = sin(pose.tx.theta);
     sasnav_rng rng;
     sasnav_rng_seed(&rng, p->seed * 0x9e3779b97f4a7c15ULL + 0x6e6f697365ULL + (uint64_t)ping);
     for (int l = 0; l < p->n_rx; l++) {
@@ -243,7 +257,12 @@ int sasnav_tank_record(const sasnav_tank_params *p, int ping, float *passband,
             double att = 1.0;
             if (p->attenuation == SASNAV_ATTEN_SPHERICAL) att = 1.0 / (rt * rr);
             else if (p->attenuation == SASNAV_ATTEN_EXPLODING) att = 1.0 / sqrt(rt + rr);
-            double a = p->gain * as[i] * att, tau = (rt + rr) / c;
+            double dir = 1.0;
+            if (a_el > 0) {
+                dir = sinc_pi(a_el * ((xs[i] - pose.tx.x) * ct + (ys[i] - pose.tx.y) * st) / rt) *
+                      sinc_pi(a_el * ((xs[i] - rx) * ca + (ys[i] - ry) * sa) / rr);
+            }
+            double a = p->gain * as[i] * att * dir, tau = (rt + rr) / c;
             long n0 = (long)ceil(tau * fs), n1 = (long)floor((tau + len) * fs);
             if (n0 < 0) n0 = 0;
             if (n1 > ns - 1) n1 = ns - 1;
@@ -365,7 +384,14 @@ int sasnav_tank_write_dir(const sasnav_tank_params *p, const char *dir)
     if ((rc = join(path, sizeof path, dir, "positions.csv"))) goto done;
     if ((rc = write_poses_csv(path, nom, p->n_pings))) goto done;
     if ((rc = join(path, sizeof path, dir, "truth.csv"))) goto done;
-    rc = write_poses_csv(path, tru, p->n_pings);
+    if ((rc = write_poses_csv(path, tru, p->n_pings))) goto done;
+    /* the sensor description the reader needs to model the recording */
+    if ((rc = join(path, sizeof path, dir, "array.csv"))) goto done;
+    sasnav_text_out ao;
+    if ((rc = sasnav_text_open(&ao, path))) goto done;
+    fprintf(ao.f, "rx_spacing,element_length,directivity\n%.9g,%.9g,%d\n", p->rx_spacing,
+            p->element_length, p->directivity);
+    rc = sasnav_text_commit(&ao);
 done:
     free(buf);
     free(chirp);
@@ -390,7 +416,31 @@ void sasnav_tank_default_read_opts(sasnav_tank_read_opts *o)
     o->clip_run = 3;
     o->rx_spacing = 0.05;
     o->element_length = 0.05;
+    o->directivity = 1;
     o->range_of_interest = 1.5;
+}
+
+/* array.csv (optional): "rx_spacing,element_length,directivity" and one
+ * line of values; overrides the options. */
+static int read_array_csv(const char *path, sasnav_tank_read_opts *o)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) return sasnav_set_error(SASNAV_ERR_IO, "cannot open %s", path);
+    char head[256];
+    double sp, el;
+    int dir, ok = fgets(head, sizeof head, f) != NULL &&
+                  !strncmp(head, "rx_spacing,element_length,directivity", 37) &&
+                  fscanf(f, "%lf,%lf,%d", &sp, &el, &dir) == 3;
+    fclose(f);
+    if (!ok || !isfinite(sp) || sp <= 0 || !isfinite(el) || el < 0 || (dir != 0 && dir != 1))
+        return sasnav_set_error(SASNAV_ERR_FORMAT,
+                                "%s: expected 'rx_spacing,element_length,directivity' and one line of "
+                                "values (spacing > 0, length >= 0, directivity 0 or 1)",
+                                path);
+    o->rx_spacing = sp;
+    o->element_length = el;
+    o->directivity = dir;
+    return SASNAV_OK;
 }
 
 /* Reads a whole WAV into channel-major samples. */
@@ -506,11 +556,13 @@ static int read_poses_csv(const char *path, sasnav_ping_pose **poses, int *n)
     return SASNAV_OK;
 }
 
-int sasnav_tank_read_dir(const char *dir, const sasnav_tank_read_opts *o, sasnav_run **run)
+int sasnav_tank_read_dir(const char *dir, const sasnav_tank_read_opts *o_in, sasnav_run **run)
 {
     if (!run) return sasnav_set_error(SASNAV_ERR_ARG, "tank: run output is NULL");
     *run = NULL;
-    if (!dir || !o) return sasnav_set_error(SASNAV_ERR_ARG, "tank: NULL directory or options");
+    if (!dir || !o_in) return sasnav_set_error(SASNAV_ERR_ARG, "tank: NULL directory or options");
+    sasnav_tank_read_opts oc = *o_in;
+    const sasnav_tank_read_opts *o = &oc;
     if (!isfinite(o->sound_speed) || o->sound_speed <= 0 || !isfinite(o->range_of_interest) ||
         o->range_of_interest <= 0)
         return sasnav_set_error(SASNAV_ERR_ARG, "tank: bad sound speed or range of interest");
@@ -521,6 +573,8 @@ int sasnav_tank_read_dir(const char *dir, const sasnav_tank_read_opts *o, sasnav
     sasnav_run *r = NULL;
     int n_pings = 0, n_truth = 0, rc;
 
+    if ((rc = join(path, sizeof path, dir, "array.csv"))) return rc;
+    if (access(path, F_OK) == 0 && (rc = read_array_csv(path, &oc))) return rc;
     if ((rc = join(path, sizeof path, dir, "positions.csv"))) return rc;
     if ((rc = read_poses_csv(path, &nav, &n_pings))) return rc;
     if ((rc = join(path, sizeof path, dir, "truth.csv"))) goto done;
@@ -575,7 +629,7 @@ int sasnav_tank_read_dir(const char *dir, const sasnav_tank_read_opts *o, sasnav
             if ((rc = sasnav_ingest_system(plan, &sys))) goto done;
             sys.sound_speed = o->sound_speed;
             sys.attenuation = o->attenuation;
-            sys.beam_pattern = 0;
+            sys.beam_pattern = o->directivity ? 1 : 0;
             sasnav_array a;
             if ((rc = sasnav_array_uniform(&a, n_rx, o->rx_spacing, o->element_length,
                                            o->element_length)))
