@@ -45,7 +45,18 @@ static const char *help =
     "  --grid ...         image grid (default: the track's extent x range of\n"
     "                     interest +-0.35 m, 5 mm pixels)\n"
     "  --threads N        OpenMP threads (default: all cores)\n"
-    "  --json             print the summary on stdout\n";
+    "  --json             print the summary on stdout\n"
+    "\n"
+    "On a terminal, a status line on stderr counts the estimated pairs.\n";
+
+/* One status line on a terminal's stderr (the run takes minutes). */
+static void progress_line(const sasnav_navigate_progress *pr, void *user)
+{
+    int *count = user;
+    if (pr->done > 0) (*count)++;
+    fprintf(stderr, "\rsasnav validate: %d pairs estimated (pair %d-%d)   ", *count, pr->p, pr->q);
+    fflush(stderr);
+}
 
 static json_t *num(double v) { return isfinite(v) ? json_real(v) : json_null(); }
 
@@ -296,12 +307,18 @@ int cmd_validate(int argc, char **argv)
     vo.nav.nthreads = (int)threads;
     vo.op.nthreads = (int)threads;
 
+    int n_done = 0;
+    if (isatty(STDERR_FILENO)) {
+        vo.nav.progress = progress_line;
+        vo.nav.progress_user = &n_done;
+    }
     sasnav_run *run = NULL;
     int rc = sasnav_run_read(input, &run);
     if (rc) return cli_fail("validate", rc, "cannot read %s", input);
     sasnav_validation v;
     rc = sasnav_validate(run, &vo, &v);
     sasnav_run_free(run);
+    if (vo.nav.progress) fputc('\n', stderr);
     if (rc) return cli_fail("validate", rc, "validation of %s failed", input);
     if (mkdir(output, 0777) && errno != EEXIST) {
         sasnav_validation_free(&v);
