@@ -31,11 +31,9 @@ static const int reduced = 1;
 static const int reduced = 0;
 #endif
 
-static sasnav_pair *make_pair(const sasnav_run *run)
+static sasnav_pair *make_pair_opts(const sasnav_run *run, const sasnav_pair_opts *base)
 {
-    sasnav_pair_opts po;
-    sasnav_pair_default_opts(&po);
-    if (reduced) po.k = po.i = 2;
+    sasnav_pair_opts po = *base;
     po.range = run->range_of_interest;
     po.tx_lag = run->tx_lag;
     sasnav_pair *pair = NULL;
@@ -43,6 +41,14 @@ static sasnav_pair *make_pair(const sasnav_run *run)
     if (pair) CHECK_OK(sasnav_pair_set_data(pair, sasnav_run_ping(run, 0), sasnav_run_ping(run, 1),
                                             sasnav_ping_displacement(&run->nav[0], &run->nav[1])));
     return pair;
+}
+
+static sasnav_pair *make_pair(const sasnav_run *run)
+{
+    sasnav_pair_opts po;
+    sasnav_pair_default_opts(&po);
+    if (reduced) po.k = po.i = 2;
+    return make_pair_opts(run, &po);
 }
 
 /* Acceptance bounds of the issue: 0.5 mm surge, lambda/25 = 0.2 mm sway,
@@ -62,6 +68,7 @@ static void check_recovery(sasnav_pose truth, uint64_t seed)
         CHECK(fabs(r.error.x - truth.x) <= bs, "surge error %.3f mm", 1e3 * (r.error.x - truth.x));
         CHECK(fabs(r.error.y - truth.y) <= bw, "sway error %.4f mm", 1e3 * (r.error.y - truth.y));
         CHECK(fabs(r.error.theta - truth.theta) <= by, "yaw error %.2e rad", r.error.theta - truth.theta);
+        CHECK(r.ambiguity >= 0 && r.ambiguity <= 1, "ambiguity %g outside [0, 1]", r.ambiguity);
         printf("truth (%.2f mm, %.2f mm, %.4f rad): error (%.3f mm, %.4f mm, %.1e rad), %d evaluations\n",
                1e3 * truth.x, 1e3 * truth.y, truth.theta, 1e3 * (r.error.x - truth.x),
                1e3 * (r.error.y - truth.y), r.error.theta - truth.theta, r.evaluations);
@@ -150,8 +157,41 @@ static void check_error_functions(void)
     sasnav_run_free(run);
 }
 
+/* The yaw held (a rail): with the prior at the true yaw error the result
+ * keeps it exactly and recovers surge and sway (coarse iterations, the
+ * reduced bounds above); a negative yaw sigma is refused. */
+static void check_fixed_yaw(void)
+{
+    sasnav_pose truth = {0.0153, -0.0081, 0.012};
+    sasnav_run *run = simulate(truth, 4);
+    if (!run) return;
+    sasnav_pair_opts po;
+    sasnav_pair_default_opts(&po);
+    po.k = 2;
+    po.i = 1;
+    po.fix_yaw = 1;
+    po.prior.theta = truth.theta;
+    sasnav_pair *pair = make_pair_opts(run, &po);
+    sasnav_pair_result r;
+    if (pair) {
+        CHECK_OK(sasnav_pair_estimate(pair, &r));
+        CHECK(r.error.theta == truth.theta, "held yaw moved to %.3e", r.error.theta);
+        CHECK(fabs(r.error.x - truth.x) <= 2e-3 && fabs(r.error.y - truth.y) <= 5e-4,
+              "held yaw: surge / sway errors %.3f / %.4f mm", 1e3 * (r.error.x - truth.x),
+              1e3 * (r.error.y - truth.y));
+    }
+    sasnav_pair_destroy(pair);
+    po.fix_yaw = 0;
+    po.yaw_sigma = -1e-3;
+    pair = NULL;
+    CHECK(sasnav_pair_create(&run->sys, &run->array, &run->win, &po, &pair) == SASNAV_ERR_ARG && !pair,
+          "negative yaw sigma accepted");
+    sasnav_run_free(run);
+}
+
 int main(void)
 {
+    check_fixed_yaw();
     check_error_functions();
     check_recovery((sasnav_pose){-0.0345, 0.0217, 0.041}, 1); /* the paper's case */
     if (!reduced) check_recovery((sasnav_pose){0.0281, -0.0143, -0.0322}, 9); /* another draw */
