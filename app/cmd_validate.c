@@ -34,6 +34,8 @@ static const char *help =
     "Writes into DIR:\n"
     "  validate.json       the summary (also on stdout with --json)\n"
     "  trajectories.csv    ping, K, along-track, cross-track, yaw (aligned)\n"
+    "  pairs.csv           every pair estimate (motion error; its error vs the\n"
+    "                      truth when known) and status\n"
     "  trajectories.png    along/cross-track deviation from the mean of the K\n"
     "  correlation.csv     pairwise image correlations (navigated images)\n"
     "  siso_J.png, simo_J.png   images with the largest K's trajectory\n"
@@ -128,6 +130,19 @@ static int write_tables(const char *dir, const sasnav_validation *v)
         for (int i = 0; i < v->n_pings; i++)
             fprintf(out.f, "%d,%d,%.9f,%.9f,%.6e\n", i, v->k[k].k, v->k[k].centroids[i].x,
                     v->k[k].centroids[i].y, v->k[k].centroids[i].theta);
+    if ((rc = sasnav_text_commit(&out))) return rc;
+    join(path, sizeof path, dir, "pairs.csv");
+    if ((rc = sasnav_text_open(&out, path))) return rc;
+    fprintf(out.f, "k,p,q,surge,sway,yaw,error_surge,error_sway,error_yaw,status\n");
+    for (int k = 0; k < v->n_k; k++)
+        for (int j = 0; j < v->k[k].n_pairs; j++) {
+            const sasnav_navigate_pair *np = &v->k[k].pairs[j];
+            fprintf(out.f, "%d,%d,%d,%.9f,%.9f,%.6e,", v->k[k].k, np->p, np->q, np->result.error.x,
+                    np->result.error.y, np->result.error.theta);
+            if (v->has_truth) fprintf(out.f, "%.9f,%.9f,%.6e,", np->error.x, np->error.y, np->error.theta);
+            else fprintf(out.f, ",,,");
+            fprintf(out.f, "%s\n", np->status == SASNAV_OK ? "ok" : sasnav_strerror(np->status));
+        }
     if ((rc = sasnav_text_commit(&out))) return rc;
     join(path, sizeof path, dir, "correlation.csv");
     if ((rc = sasnav_text_open(&out, path))) return rc;

@@ -1,0 +1,42 @@
+#!/bin/sh
+# The tank experiment as a user runs it: `sasnav simulate --preset tank`
+# writes the recordings, `sasnav ingest --wav` reads them, `sasnav validate
+# --json` (K = 7 only, coarse iterations, to stay short) prints the issue's
+# fields and writes its files; the jump and the array yaw against the
+# simulated truth within the issue's bounds (1 mm, 2e-3 rad).
+# Usage: sh tests/cli_validate.sh path/to/sasnav
+set -u
+CLI=${1:?usage: cli_validate.sh path/to/sasnav}
+T=$(mktemp -d "${TMPDIR:-/tmp}/sasnav-cli-validate-XXXXXX") || exit 1
+trap 'rm -rf "$T"' EXIT INT TERM
+FAILED=0
+fail() {
+    echo "cli_validate: FAIL: $*" >&2
+    FAILED=1
+}
+
+"$CLI" simulate --preset tank -o "$T/rec" 2> "$T/sim.err" || { cat "$T/sim.err" >&2; fail "simulate --preset tank"; exit 1; }
+for f in ping_000.wav ping_031.wav chirp.wav positions.csv truth.csv array.csv; do
+    [ -s "$T/rec/$f" ] || fail "recording lacks $f"
+done
+"$CLI" ingest --wav "$T/rec" -o "$T/tank.h5" 2> "$T/ing.err" || { cat "$T/ing.err" >&2; fail "ingest --wav"; exit 1; }
+if "$CLI" validate "$T/tank.h5" --fix-yaw --k-min 7 --k 2 --i 1 --json -o "$T/val" > "$T/val.json" 2> "$T/val.err"; then
+    for key in surge_jump_error yaw_error sway_spread surge_spread min_image_correlation; do
+        grep -q "\"$key\"" "$T/val.json" || fail "JSON lacks \"$key\""
+    done
+    for f in validate.json trajectories.csv pairs.csv correlation.csv trajectories_surge.png \
+             trajectories_sway.png siso_0.png simo_7.png nominal_simo_0.png report.md; do
+        [ -s "$T/val/$f" ] || fail "validate wrote no $f"
+    done
+    ls "$T/val" | grep -q 'tmp' && fail "temporary files left in the output directory"
+    # values: jump within 1 mm, array yaw within 2e-3 rad (awk reads the JSON lines)
+    awk -F': ' '/"surge_jump_error"/ { gsub(/,/, "", $2); j = $2 }
+                /"yaw_error"/ { gsub(/,/, "", $2); y = $2 }
+                END { exit !(j != "" && y != "" && j * j < 1e-6 && y * y < 4e-6) }' "$T/val.json" ||
+        fail "jump or yaw outside the bounds: $(grep -E '"(surge_jump|yaw)_error"' "$T/val.json" | tr -d '\n')"
+else
+    cat "$T/val.err" >&2
+    fail "validate exited non-zero"
+fi
+[ "$FAILED" -eq 0 ] && echo "cli_validate: ok"
+exit "$FAILED"
