@@ -1,9 +1,8 @@
 #!/bin/sh
 # The tank experiment as a user runs it: `sasnav simulate --preset tank`
 # writes the recordings (cut to 14 pings), `sasnav ingest --wav` reads them,
-# `sasnav validate
-# --json` (K = 7 only, coarse iterations, to stay short) prints the issue's
-# fields and writes its files; the jump and the array yaw against the
+# `sasnav validate --json` (K = 7 only, coarse iterations, to stay short)
+# prints the fields and writes its files; the jump and the array yaw against the
 # simulated truth within the bounds (1 mm, 2e-3 rad).
 # Usage: sh tests/cli_validate.sh path/to/sasnav
 set -u
