@@ -18,7 +18,7 @@
 
 static const char *help =
     "usage: sasnav validate run.h5 -o DIR [--k-min K] [--k-max K]\n"
-    "                       [--fix-yaw | --yaw-sigma S] [--k K] [--i I]\n"
+    "                       [--fix-yaw | --yaw-sigma S] [--long-baselines] [--k K] [--i I]\n"
     "                       [--grid X0,X1,NX,Y0,Y1,NY] [--threads N] [--json]\n"
     "\n"
     "The validation method of the paper's tank experiment (Sec. V): from a run\n"
@@ -45,6 +45,9 @@ static const char *help =
     "  --k-min K, --k-max K  overlaps to test (default 4 .. the run's own)\n"
     "  --fix-yaw          hold every pair's yaw error at 0 (rail, plotter)\n"
     "  --yaw-sigma S      prior on the pair yaw error (rad; default none)\n"
+    "  --long-baselines   also estimate the pairs two steps apart within each\n"
+    "                     sub-sampled run (where they share phase centres) and\n"
+    "                     combine by least squares\n"
     "  --k K, --i I       estimator iterations of the final stage (default 8, 8)\n"
     "  --grid ...         image grid (default: the track's extent x range of\n"
     "                     interest +-0.35 m, 5 mm pixels)\n"
@@ -281,6 +284,7 @@ int cmd_validate(int argc, char **argv)
     static const struct option longopts[] = {
         {"k-min", required_argument, 0, 'a'}, {"k-max", required_argument, 0, 'b'},
         {"fix-yaw", no_argument, 0, 'F'},     {"yaw-sigma", required_argument, 0, 'y'},
+        {"long-baselines", no_argument, 0, 'L'},
         {"k", required_argument, 0, 'k'},     {"i", required_argument, 0, 'i'},
         {"grid", required_argument, 0, 'g'},  {"threads", required_argument, 0, 't'},
         {"json", no_argument, 0, 'j'},        {"output", required_argument, 0, 'o'},
@@ -296,6 +300,7 @@ int cmd_validate(int argc, char **argv)
         case 'a': if (cli_parse_int(optarg, 1, 127, &kmin)) return cli_fail("validate", 0, "--k-min needs 1..127"); break;
         case 'b': if (cli_parse_int(optarg, 1, 127, &kmax)) return cli_fail("validate", 0, "--k-max needs 1..127"); break;
         case 'F': vo.nav.pair.fix_yaw = 1; break;
+        case 'L': vo.nav.long_baselines = 1; break;
         case 'y':
             if (cli_parse_double(optarg, &vo.nav.pair.yaw_sigma) || !(vo.nav.pair.yaw_sigma >= 0))
                 return cli_fail("validate", 0, "--yaw-sigma needs a standard deviation >= 0 (rad)");

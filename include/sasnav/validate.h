@@ -6,7 +6,9 @@
  * every s-th ping gives runs with K = N - m s shared phase centres and s
  * phases (first ping 0..s-1). sasnav_validate
  *   1. navigates every phase of every K in [k_min, k_max] (consecutive pairs
- *      of the sub-sampled run, sasnav_navigate without alignment);
+ *      of the sub-sampled run, and with opts.nav.long_baselines the pairs two
+ *      steps apart where they share phase centres; sasnav_navigate without
+ *      alignment);
  *   2. combines the phases of a K into one trajectory of all pings: the
  *      phase starting at ping 0 of the largest K is the reference (it starts
  *      at the run's nominal first ping); every other phase, whose start is
@@ -45,8 +47,10 @@ extern "C" {
 typedef struct {
     int k_min, k_max;          /* overlaps to test (default 4 and 0 = the run's
                                   own, N - m) */
-    sasnav_navigate_opts nav;  /* per-phase navigation (align and
-                                  long_baselines are forced off) */
+    sasnav_navigate_opts nav;  /* per-phase navigation (align is forced off;
+                                  nav.long_baselines adds the pairs two
+                                  steps apart within each sub-sampled run,
+                                  combined by least squares) */
     sasnav_grid grid;          /* image grid; nx = 0 (default): the track's
                                   along-track extent, range of interest
                                   +-0.35 m, 5 mm pixels */

@@ -90,7 +90,6 @@ static int navigate_phase(const sasnav_run *run, const sasnav_validate_opts *o, 
     int rc = sasnav_run_subset(run, idx, m, NULL, 0, &sub);
     sasnav_navigate_opts no = o->nav;
     no.align = 0;
-    no.long_baselines = 0;
     sasnav_navigation nav;
     memset(&nav, 0, sizeof nav);
     if (!rc) rc = sasnav_navigate(sub, &no, &nav);
@@ -246,7 +245,7 @@ int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sas
         double tk = now_seconds();
         vk->k = k;
         vk->stride = vk->n_phases = stride;
-        vk->pairs = calloc((size_t)n, sizeof *vk->pairs);
+        vk->pairs = calloc((size_t)2 * n, sizeof *vk->pairs); /* consecutive + long */
         vk->centroids = calloc((size_t)n, sizeof *vk->centroids);
         out->n_k++;
         if (!vk->pairs || !vk->centroids) {
