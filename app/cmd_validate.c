@@ -236,7 +236,8 @@ static int plot_images(const char *dir, const sasnav_validation *v)
     return rc;
 }
 
-static int write_report(const char *dir, const char *input, const sasnav_validation *v, const char *mode)
+static int write_report(const char *dir, const char *input, const sasnav_validation *v, const char *mode,
+                        const sasnav_validate_opts *vo)
 {
     char path[4096];
     join(path, sizeof path, dir, "report.md");
@@ -246,9 +247,11 @@ static int write_report(const char *dir, const char *input, const sasnav_validat
     FILE *f = out.f;
     fprintf(f, "# sasnav validate: %s\n\n", input);
     fprintf(f, "Paper Sec. V: %d pings; sub-sampled runs with K = %d..%d shared phase centres, all "
-               "phases, combined per K (phases other than the reference placed by a rigid "
-               "least-squares fit), each rotated by its fitted track angle. Pair yaw: %s.\n\n",
-            v->n_pings, v->k[v->n_k - 1].k, v->k[0].k, mode);
+               "phases%s, combined per K (phases other than the reference placed by a rigid "
+               "least-squares fit on the largest K's trajectory, which is rotated by its fitted "
+               "track angle). Pair yaw: %s.\n\n",
+            v->n_pings, v->k[v->n_k - 1].k, v->k[0].k,
+            vo->nav.long_baselines ? " (with the pairs two steps apart, least squares)" : "", mode);
     fprintf(f, "| K | stride | pairs | failed | track angle (rad) |%s time (s) |\n",
             v->has_truth ? " rms surge / sway vs truth (mm) |" : "");
     fprintf(f, "|---|---|---|---|---|%s---|\n", v->has_truth ? "---|" : "");
@@ -267,10 +270,10 @@ static int write_report(const char *dir, const char *input, const sasnav_validat
         fprintf(f, " (error %+.2e rad); largest surge step (pings %d-%d) error %+.3f mm", v->yaw_error,
                 v->jump_p, v->jump_p + 1, 1e3 * v->surge_jump_error);
     fprintf(f, ".\n\n");
-    fprintf(f, "Complex image agreement over %d pixels within 12 dB of the peak: minimum correlation "
+    fprintf(f, "Complex image agreement over %d pixels within %g dB of the peak: minimum correlation "
                "%.3f over all %d navigated images (SISO-SISO %.3f, SIMO-SIMO %.3f, SISO-SIMO %.3f); "
                "with the nominal navigation %.3f, with the true navigation %.3f.\n\n",
-            v->n_region, v->min_correlation, v->n_k * (v->n_siso + v->n_simo), v->min_correlation_siso,
+            v->n_region, vo->region_db, v->min_correlation, v->n_k * (v->n_siso + v->n_simo), v->min_correlation_siso,
             v->min_correlation_simo, v->min_correlation_cross, v->min_correlation_nominal,
             v->min_correlation_truth);
     fprintf(f, "![surge](trajectories_surge.png)\n![sway](trajectories_sway.png)\n\n");
@@ -357,7 +360,7 @@ int cmd_validate(int argc, char **argv)
     if (!rc) rc = write_tables(output, &v);
     if (!rc) rc = plot_trajectories(output, &v);
     if (!rc) rc = plot_images(output, &v);
-    if (!rc) rc = write_report(output, input, &v, mode);
+    if (!rc) rc = write_report(output, input, &v, mode, &vo);
     if (rc) {
         free(text);
         sasnav_validation_free(&v);
