@@ -9,6 +9,7 @@
 #include "sasnav/sim.h"
 #include "sasnav/trajectory.h"
 #include "io/textfile.h"
+#include "core/clock.h"
 
 #include <errno.h>
 #include <getopt.h>
@@ -17,7 +18,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <time.h>
 #include <unistd.h>
 
 static const char *help =
@@ -59,13 +59,6 @@ static const char *image_name[N_IMAGES] = {"nominal", "true", "subspace", "dpca"
                                            "subspace-aligned"};
 static const char *method_name[2] = {"subspace", "DPCA"};
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
 static void path_in(const demo *d, const char *name, char *buf, size_t size)
 {
     snprintf(buf, size, "%s/%s", d->dir, name);
@@ -101,7 +94,7 @@ static double correlation(const sasnav_cfloat *a, const sasnav_cfloat *b, size_t
 
 static int simulate(demo *d)
 {
-    double t0 = now_seconds();
+    double t0 = sasnav_now_seconds();
     int rc = sasnav_scenario_preset("paper-trajectory", &d->sc);
     if (rc) return cli_fail("demo", rc, "preset");
     d->sc.snr_db = 30.0;
@@ -115,7 +108,7 @@ static int simulate(demo *d)
     path_in(d, "run.h5", path, sizeof path);
     rc = sasnav_run_write(path, d->run);
     if (rc) return cli_fail("demo", rc, "cannot write %s", path);
-    d->seconds_simulate = now_seconds() - t0;
+    d->seconds_simulate = sasnav_now_seconds() - t0;
     return 0;
 }
 
@@ -149,7 +142,7 @@ static int navigate(demo *d, int m)
 
 static int images(demo *d)
 {
-    double t0 = now_seconds();
+    double t0 = sasnav_now_seconds();
     const sasnav_grid *g = &d->sc.image_grid;
     size_t np = (size_t)g->nx * g->ny;
     const sasnav_ping_pose *navs[N_IMAGES] = {d->run->nav, d->run->truth, d->nav[0].anchored,
@@ -163,7 +156,7 @@ static int images(demo *d)
         int rc = sasnav_backproject(d->run, navs[k], g, &oo, d->image[k]);
         if (rc) return cli_fail("demo", rc, "backprojection (%s navigation)", image_name[k]);
     }
-    d->seconds_images = now_seconds() - t0;
+    d->seconds_images = sasnav_now_seconds() - t0;
     for (int k = 0; k < N_IMAGES; k++) {
         d->correlation[k] = correlation(d->image[k], d->image[1], np);
         char name[64], path[4096], title[128];
@@ -333,7 +326,7 @@ static int write_report(demo *d)
         fprintf(f, "| %s navigation (%d pairs, %.3g s per pair) | %.2f |\n", method_name[m],
                 d->nav[m].n_pairs, d->nav[m].seconds_per_pair, d->nav[m].seconds);
     fprintf(f, "| %d backprojections | %.2f |\n", N_IMAGES, d->seconds_images);
-    fprintf(f, "| whole demo | %.2f |\n", now_seconds() - d->t_start);
+    fprintf(f, "| whole demo | %.2f |\n", sasnav_now_seconds() - d->t_start);
     rc = sasnav_text_commit(&out);
     return rc ? cli_fail("demo", rc, "cannot write the report") : 0;
 }
@@ -370,7 +363,7 @@ int cmd_demo(int argc, char **argv)
     demo d;
     memset(&d, 0, sizeof d);
     d.dir = "demo";
-    d.t_start = now_seconds();
+    d.t_start = sasnav_now_seconds();
     long threads = 0;
     int opt;
     optind = 1;
@@ -398,7 +391,7 @@ int cmd_demo(int argc, char **argv)
                 "image correlation with the true image: subspace %.3f, DPCA %.3f, nominal %.3f; "
                 "%.1f s -> %s/report.md\n",
                 1e3 * s->cumulative[n - 1].y, 1e3 * p->cumulative[n - 1].y, d.correlation[2],
-                d.correlation[3], d.correlation[0], now_seconds() - d.t_start, d.dir);
+                d.correlation[3], d.correlation[0], sasnav_now_seconds() - d.t_start, d.dir);
     }
     demo_free(&d);
     return rc;

@@ -12,12 +12,12 @@
  * Steps and bounds derive from the geometry: phase-centre spacing, range and
  * wavelength. */
 #include "pair_internal.h"
+#include "core/clock.h"
 
 #include <math.h>
 #include <nlopt.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #ifndef SCAN_LEVEL
 #define SCAN_LEVEL 1
@@ -204,19 +204,12 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     return SASNAV_OK;
 }
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
 int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
 {
     if (!pr || !res) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
     memset(res, 0, sizeof *res);
     if (!pr->ready) return sasnav_set_error(SASNAV_ERR_ARG, "estimator has no data (call set_data)");
-    double t0 = now_seconds();
+    double t0 = sasnav_now_seconds();
     long apps0 = pr->applications;
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
     double lambda = sasnav_wavelength(&pr->sys);
@@ -314,7 +307,7 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     if (rc) return rc;
     res->evaluations = 1 + nglob + res->evaluations_zeta + res->evaluations_eta + 1;
     res->applications = pr->applications - apps0;
-    res->seconds = now_seconds() - t0;
+    res->seconds = sasnav_now_seconds() - t0;
     res->status = (zrc || erc) ? SASNAV_ERR_NOT_CONVERGED : SASNAV_OK;
     if (res->overlap < o->min_overlap) res->status = SASNAV_ERR_NO_OVERLAP;
     return SASNAV_OK;

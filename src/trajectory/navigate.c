@@ -3,11 +3,11 @@
 #include "sasnav/navigate.h"
 #include "sasnav/error.h"
 #include "sasnav/trajectory.h"
+#include "core/clock.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 void sasnav_navigate_default_opts(sasnav_navigate_opts *opts)
 {
@@ -36,13 +36,6 @@ void sasnav_navigation_free(sasnav_navigation *nav)
     free(nav->cumulative);
     free(nav->differential);
     memset(nav, 0, sizeof *nav);
-}
-
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
 static sasnav_pose pose_sub(sasnav_pose a, sasnav_pose b)
@@ -107,11 +100,11 @@ static int estimate_pair(nav_ctx *ctx, int p, int q, sasnav_navigate_pair *np)
         o.nthreads = ctx->opts->nthreads;
         rc = sasnav_dpca_estimate(run, p, q, &o, &np->result, NULL);
     } else {
-        double t = now_seconds();
+        double t = sasnav_now_seconds();
         rc = sasnav_pair_set_data(ctx->estimator, sasnav_run_ping(run, p), sasnav_run_ping(run, q),
                                   np->nominal);
         if (!rc) rc = sasnav_pair_estimate(ctx->estimator, &np->result);
-        if (rc) np->result.seconds = now_seconds() - t;
+        if (rc) np->result.seconds = sasnav_now_seconds() - t;
     }
     if (fatal_code(rc)) return rc;
     if (!rc && np->result.status == SASNAV_ERR_NO_OVERLAP) rc = SASNAV_ERR_NO_OVERLAP;
@@ -135,7 +128,7 @@ static void report(nav_ctx *ctx, int done, int total, const sasnav_navigate_pair
     if (!ctx->opts->progress) return;
     sasnav_navigate_progress pr = {done, total, np ? np->p : -1, np ? np->q : -1,
                                    np ? np->status : SASNAV_OK, np ? &np->result : NULL,
-                                   now_seconds() - ctx->t0};
+                                   sasnav_now_seconds() - ctx->t0};
     ctx->opts->progress(&pr, ctx->opts->progress_user);
 }
 
@@ -324,7 +317,7 @@ int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
     }
     int rc = check_input(run, opts);
     if (rc) return rc;
-    nav_ctx ctx = {run, opts, NULL, now_seconds()};
+    nav_ctx ctx = {run, opts, NULL, sasnav_now_seconds()};
     out->method = opts->method;
     out->n_pings = run->n_pings;
     if (opts->method == SASNAV_METHOD_SUBSPACE) {
@@ -337,7 +330,7 @@ int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
     }
     rc = navigate(&ctx, out);
     sasnav_pair_destroy(ctx.estimator);
-    out->seconds = now_seconds() - ctx.t0;
+    out->seconds = sasnav_now_seconds() - ctx.t0;
     if (rc) {
         /* Keep the message of the failure across the frees. */
         sasnav_navigation_free(out);

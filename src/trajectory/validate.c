@@ -4,12 +4,12 @@
 
 #include "sasnav/error.h"
 #include "sasnav/trajectory.h"
+#include "core/clock.h"
 
 #include <complex.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 void sasnav_validate_default_opts(sasnav_validate_opts *o)
 {
@@ -35,13 +35,6 @@ void sasnav_validation_free(sasnav_validation *v)
     free(v->image_index);
     free(v->correlation);
     memset(v, 0, sizeof *v);
-}
-
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
 /* Rigid motion (rotation + translation) minimising sum |M a_i - b_i|^2 over
@@ -190,7 +183,7 @@ int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sas
     else sasnav_validate_default_opts(&o);
     int rc = sasnav_run_check(run);
     if (rc) return rc;
-    double t0 = now_seconds();
+    double t0 = sasnav_now_seconds();
     int n = run->n_pings, nrx = run->array.n_rx;
     if (nrx < 2) return sasnav_set_error(SASNAV_ERR_ARG, "validation needs >= 2 receivers");
     double d = fabs(run->array.rx_u[1] - run->array.rx_u[0]) / 2.0;
@@ -242,7 +235,7 @@ int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sas
         int stride = (nrx - k) / mstep;
         if (n < 2 * stride) continue;
         sasnav_validate_k *vk = &out->k[out->n_k];
-        double tk = now_seconds();
+        double tk = sasnav_now_seconds();
         vk->k = k;
         vk->stride = vk->n_phases = stride;
         vk->pairs = calloc((size_t)2 * n, sizeof *vk->pairs); /* consecutive + long */
@@ -284,7 +277,7 @@ int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sas
             vk->rms_error = (sasnav_pose){sqrt(sx / n), sqrt(sy / n), sqrt(st / n)};
             free(tc);
         }
-        vk->seconds = now_seconds() - tk;
+        vk->seconds = sasnav_now_seconds() - tk;
     }
     if (!rc && out->n_k == 0)
         rc = sasnav_set_error(SASNAV_ERR_ARG, "no K in %d..%d can be reached with %d pings", k_min, k_max, n);
@@ -405,7 +398,7 @@ int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sas
     free(poses);
     free(region);
     free(mean);
-    out->seconds = now_seconds() - t0;
+    out->seconds = sasnav_now_seconds() - t0;
     if (rc) sasnav_validation_free(out);
     return rc;
 }
