@@ -230,6 +230,9 @@ int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sas
     out->n_simo = s0;
 
     /* 1-3: navigate every phase of every K, combine, align. */
+    sasnav_pose *nominal_c = malloc(sizeof(sasnav_pose) * n);
+    if (!nominal_c) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    rc = sasnav_traj_centroids(run->nav, n, nominal_c);
     for (int k = k_max; k >= k_min && !rc; k--) {
         if ((nrx - k) % mstep) continue; /* not reachable by sub-sampling */
         int stride = (nrx - k) / mstep;
@@ -245,22 +248,11 @@ int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sas
             rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
             break;
         }
-        const sasnav_pose *ref = out->n_k > 1 ? out->k[0].centroids : NULL;
-        sasnav_pose *nominal_c = NULL;
-        for (int ph = 0; ph < stride && !rc; ph++) {
-            const sasnav_pose *r = ref;
-            if (!ref && ph > 0) {
-                /* the reference K's own later phases go onto the nominal track */
-                if (!nominal_c) {
-                    nominal_c = malloc(sizeof(sasnav_pose) * n);
-                    if (!nominal_c) rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-                    else rc = sasnav_traj_centroids(run->nav, n, nominal_c);
-                }
-                r = nominal_c;
-            }
-            if (!rc) rc = navigate_phase(run, &o, ph, stride, r, vk);
-        }
-        free(nominal_c);
+        /* Phases go onto the reference (the largest K's trajectory); the
+         * reference's own later phases onto the nominal track. */
+        const sasnav_pose *ref = out->n_k > 1 ? out->k[0].centroids : nominal_c;
+        for (int ph = 0; ph < stride && !rc; ph++)
+            rc = navigate_phase(run, &o, ph, stride, out->n_k > 1 || ph > 0 ? ref : NULL, vk);
         if (!rc) rc = sasnav_traj_align(vk->centroids, n, &vk->track_angle);
         if (!rc && run->truth) {
             sasnav_pose *tc = malloc(sizeof(sasnav_pose) * n);
@@ -279,6 +271,7 @@ int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sas
         }
         vk->seconds = sasnav_now_seconds() - tk;
     }
+    free(nominal_c);
     if (!rc && out->n_k == 0)
         rc = sasnav_set_error(SASNAV_ERR_ARG, "no K in %d..%d can be reached with %d pings", k_min, k_max, n);
 
