@@ -70,7 +70,12 @@ static int local_stage(stage_ctx *c, sasnav_pose start, sasnav_pose step, sasnav
     nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, (unsigned)c->ndim);
     if (!opt) return sasnav_set_error(SASNAV_ERR_NOMEM, "NLopt could not create an optimiser");
     double lb[3] = {-hw.x, -hw.y, -hw.theta}, ub[3] = {hw.x, hw.y, hw.theta};
-    double dx[3] = {0.5, 0.5, 0.5}, u[3] = {0, 0, 0};
+    /* Initial steps of half a unit, within the bounds (NLopt refuses a
+     * step larger than the box). */
+    double dx[3] = {fmin(0.5, hw.x), fmin(0.5, hw.y), fmin(0.5, hw.theta)};
+    double u[3] = {0, 0, 0};
+    *best = start;
+    *fbest = HUGE_VAL;
     nlopt_set_lower_bounds(opt, lb);
     nlopt_set_upper_bounds(opt, ub);
     nlopt_set_initial_step(opt, dx);
@@ -137,6 +142,13 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     double step = 0.5 * pc_spacing / o->range;
     int nt = o->fix_yaw ? 0 : (int)ceil(b.theta / step);
     if (nt > 2000) nt = 2000;
+    /* With the yaw held the comb lies along surge itself (a phase-centre
+     * spacing apart): scan surge in quarter spacings over the box instead. */
+    double sstep = 0.25 * pc_spacing;
+    if (o->fix_yaw) {
+        nt = (int)ceil(b.x / sstep);
+        if (nt > 2000) nt = 2000;
+    }
     int ns = 2 * nt + 1;
     double *zs = malloc(sizeof(double) * (size_t)ns);
     sasnav_pose *es = malloc(sizeof(sasnav_pose) * (size_t)ns);
@@ -146,8 +158,14 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
         return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the valley scan");
     }
     for (int it = -nt; it <= nt; it++) {
-        double theta_t = pr->nominal.theta + c.theta + (nt > 0 ? it * b.theta / nt : 0.0);
-        sasnav_pose e = valley_point(pr, hd, zx, zy, sx, sy, theta_t);
+        sasnav_pose e;
+        if (o->fix_yaw) {
+            e = valley_point(pr, hd, zx, zy, sx, sy, pr->nominal.theta + c.theta);
+            e.x = c.x + it * sstep;
+        } else {
+            double theta_t = pr->nominal.theta + c.theta + (nt > 0 ? it * b.theta / nt : 0.0);
+            e = valley_point(pr, hd, zx, zy, sx, sy, theta_t);
+        }
         zs[it + nt] = HUGE_VAL;
         es[it + nt] = e;
         if (fabs(e.x - c.x) > b.x || fabs(e.y - c.y) > b.y) continue;
@@ -195,7 +213,7 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     double fr;
     /* Bounds: 2 units in sway, half a unit along surge and yaw so that the
      * refinement stays with the chosen candidate of the valley. */
-    sasnav_pose hw = {0.5, 2.0, 0.5};
+    sasnav_pose hw = {o->fix_yaw ? sstep / pc_spacing : 0.5, 2.0, 0.5};
     rc = local_stage(&ctx, arg, unit, hw, 0.02, o->max_evaluations, &refined, &fr);
     n += ctx.evals;
     if (rc && rc != SASNAV_ERR_NOT_CONVERGED) return rc;
