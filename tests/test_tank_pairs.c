@@ -73,13 +73,7 @@ int main(void)
 {
     sasnav_tank_params p;
     sasnav_tank_default(&p);
-    char dir[1024];
-    snprintf(dir, sizeof dir, "%s/rec", test_tmpdir());
-    CHECK_OK(sasnav_tank_write_dir(&p, dir));
-    sasnav_tank_read_opts ro;
-    sasnav_tank_default_read_opts(&ro);
-    sasnav_run *run = NULL;
-    CHECK_OK(sasnav_tank_read_dir(dir, &ro, &run));
+    sasnav_run *run = test_tank_run(&p);
     if (!run) return test_summary("test_tank_pairs");
     CHECK(run->n_pings == 32 && run->truth, "tank run: %d pings", run->n_pings);
     double d = 0.5 * fabs(run->array.rx_u[1] - run->array.rx_u[0]);

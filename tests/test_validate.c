@@ -81,13 +81,7 @@ int main(void)
     p.jump_ping = 8;
     p.x_start = -0.5 * (p.n_pings - 1) * p.step;
     p.n_clutter = 50;
-    char dir[1024];
-    snprintf(dir, sizeof dir, "%s/rec", test_tmpdir());
-    CHECK_OK(sasnav_tank_write_dir(&p, dir));
-    sasnav_tank_read_opts ro;
-    sasnav_tank_default_read_opts(&ro);
-    sasnav_run *run = NULL;
-    CHECK_OK(sasnav_tank_read_dir(dir, &ro, &run));
+    sasnav_run *run = test_tank_run(&p);
     if (!run) return test_summary("test_validate");
     test_subset(run);
 

@@ -1,5 +1,7 @@
 #include "testutil.h"
 
+#include "sasnav/error.h"
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -28,4 +30,16 @@ const char *test_tmpdir(void)
         }
     }
     return dir;
+}
+
+sasnav_run *test_tank_run(const sasnav_tank_params *p)
+{
+    char dir[1024];
+    snprintf(dir, sizeof dir, "%s/rec", test_tmpdir());
+    CHECK_OK(sasnav_tank_write_dir(p, dir));
+    sasnav_tank_read_opts ro;
+    sasnav_tank_default_read_opts(&ro);
+    sasnav_run *run = NULL;
+    CHECK_OK(sasnav_tank_read_dir(dir, &ro, &run));
+    return run;
 }

@@ -5,6 +5,8 @@
 
 #include <stdio.h>
 
+#include "sasnav/tank.h"
+
 extern int test_failures;
 extern int test_checks;
 
@@ -30,5 +32,10 @@ int test_summary(const char *name);
 
 /* A fresh temporary directory for the test's files (created, mkdtemp). */
 const char *test_tmpdir(void);
+
+/* The tank recording of `p` written as WAV files under test_tmpdir()/rec
+ * and read back through the ingest chain with the default read options
+ * (CHECKs each step; NULL on failure). Free with sasnav_run_free. */
+sasnav_run *test_tank_run(const sasnav_tank_params *p);
 
 #endif
