@@ -24,6 +24,8 @@ static const char *help =
     "                      passband), chirp.wav, positions.csv [, truth.csv,\n"
     "                      array.csv] (as written by 'sasnav simulate --preset\n"
     "                      tank'); decimation default 33\n"
+    "  --range R           (--wav) range of interest: centre of the estimation\n"
+    "                      and image grids (m, default 1.5, the tank's plate)\n"
     "  --background DIR    empty-scene recording, subtracted ping by ping\n"
     "  --mic N             microphone (column) 1 or 2 (default 1)\n"
     "  --first N           first ping, 0-based (default 0)\n"
@@ -61,9 +63,11 @@ int cmd_ingest(int argc, char **argv)
         {"bandwidth", required_argument, 0, 'B'},  {"no-room", no_argument, 0, 'R'},
         {"radius", required_argument, 0, 'r'},     {"clip-run", required_argument, 0, 'c'},
         {"output", required_argument, 0, 'o'},     {"help", no_argument, 0, 'h'},
-        {"wav", required_argument, 0, 'w'},        {0, 0, 0, 0}};
+        {"wav", required_argument, 0, 'w'},        {"range", required_argument, 0, 'G'},
+        {0, 0, 0, 0}};
     const char *dir = NULL, *bgdir = NULL, *output = NULL, *wavdir = NULL;
     int decimation_given = 0;
+    double range = 0.0;
     sasnav_airsas_opts o;
     sasnav_airsas_default_opts(&o);
     long v;
@@ -100,6 +104,11 @@ int cmd_ingest(int argc, char **argv)
             decimation_given = 1;
             break;
         case 'w': wavdir = optarg; break;
+        case 'G':
+            if (cli_parse_double(optarg, &d) || !(d > 0))
+                return cli_fail("ingest", 0, "--range needs a range > 0 (m)");
+            range = d;
+            break;
         case 'M': o.compression = SASNAV_COMPRESS_MATCHED; break;
         case 'T':
             if (parse_taper(optarg, &o.taper))
@@ -136,7 +145,7 @@ int cmd_ingest(int argc, char **argv)
                         argv[optind]);
     if (wavdir) {
         if (!output) return cli_fail("ingest", 0, "an output file is required (-o run.h5)");
-        return cmd_ingest_wav(wavdir, decimation_given ? o.decimation : 0, output);
+        return cmd_ingest_wav(wavdir, decimation_given ? o.decimation : 0, range, output);
     }
     if (!dir) return cli_fail("ingest", 0, "an input is required (--airsas DIR or --wav DIR)");
     if (!output) return cli_fail("ingest", 0, "an output file is required (-o run.h5)");

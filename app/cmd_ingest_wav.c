@@ -5,19 +5,21 @@
 
 #include <stdio.h>
 
-int cmd_ingest_wav(const char *dir, int decimation, const char *output);
+int cmd_ingest_wav(const char *dir, int decimation, double range, const char *output);
 
 /* Reads DIR (ping_NNN.wav, chirp.wav, positions.csv, truth.csv if present;
  * see include/sasnav/tank.h), runs the ingest chain (f0 105 kHz, B 30 kHz,
- * decimation `decimation`, or 33 when < 1) and writes the run to `output`.
+ * decimation `decimation`, or 33 when < 1; range of interest `range`, or
+ * 1.5 m when not > 0) and writes the run to `output`.
  * Returns 0 or 1 (message printed), like the other commands. */
-int cmd_ingest_wav(const char *dir, int decimation, const char *output)
+int cmd_ingest_wav(const char *dir, int decimation, double range, const char *output)
 {
     if (!dir) return cli_fail("ingest", 0, "an input directory is required (--wav DIR)");
     if (!output) return cli_fail("ingest", 0, "an output file is required (-o run.h5)");
     sasnav_tank_read_opts o;
     sasnav_tank_default_read_opts(&o);
     if (decimation >= 1) o.decimation = decimation;
+    if (range > 0) o.range_of_interest = range;
     sasnav_run *run = NULL;
     int rc = sasnav_tank_read_dir(dir, &o, &run);
     if (rc) return cli_fail("ingest", rc, "cannot ingest the WAV recording %s", dir);

@@ -14,7 +14,8 @@
 
 static const char *help =
     "usage: sasnav navigate run.h5 [--method subspace|dpca] [--long-baselines]\n"
-    "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--cross-extent M]\n"
+    "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
+    "                       [--cross-extent M]\n"
     "                       [--threads N] [--json]\n"
     "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
     "\n"
@@ -37,6 +38,9 @@ static const char *help =
     "  --yaw-sigma S     prior on each pair's yaw error, rad (gyro or rail;\n"
     "                    default none): resolves the surge-yaw ambiguity of\n"
     "                    compact scenes (see 'sasnav pair --help')\n"
+    "  --surge-sigma S   scale of a prior on each pair's surge error, m (the\n"
+    "                    nominal step's accuracy; default none; see 'sasnav\n"
+    "                    pair --help')\n"
     "  --cross-extent M  along-track extent of the estimation grid (see\n"
     "                    'sasnav pair --help')\n"
     "  --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)\n"
@@ -176,7 +180,7 @@ int cmd_navigate(int argc, char **argv)
         {"threads", required_argument, 0, 't'}, {"json", no_argument, 0, 'j'},
         {"yaw-sigma", required_argument, 0, 'y'}, {"first-pose", required_argument, 0, 'f'},
         {"anchor-truth", no_argument, 0, 'A'}, {"fix-yaw", no_argument, 0, 'F'},
-        {"cross-extent", required_argument, 0, 'X'},
+        {"cross-extent", required_argument, 0, 'X'}, {"surge-sigma", required_argument, 0, 'U'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -207,6 +211,10 @@ int cmd_navigate(int argc, char **argv)
         case 'y':
             if (cli_parse_double(optarg, &no.pair.yaw_sigma) || !(no.pair.yaw_sigma >= 0))
                 return cli_fail("navigate", 0, "--yaw-sigma needs a standard deviation >= 0 (rad)");
+            break;
+        case 'U':
+            if (cli_parse_double(optarg, &no.pair.surge_sigma) || !(no.pair.surge_sigma >= 0))
+                return cli_fail("navigate", 0, "--surge-sigma needs a scale >= 0 (m)");
             break;
         case 'f':
             if (cli_parse_doubles(optarg, 3, first)) return cli_fail("navigate", 0, "--first-pose needs X,Y,YAW");

@@ -13,7 +13,8 @@
 
 static const char *help =
     "usage: sasnav pair run.h5 [--p I --q J] [--json] [--k K] [--i I]\n"
-    "                   [--prior S,W,Y] [--yaw-sigma S | --fix-yaw] [--cross-extent M]\n"
+    "                   [--prior S,W,Y] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
+    "                   [--cross-extent M]\n"
     "                   [--no-global] [--subintervals N]\n"
     "                   [--range R] [--lag-model fixed|motion] [--threads N]\n"
     "\n"
@@ -27,6 +28,10 @@ static const char *help =
     "  --k K, --i I      CGLS and alternating-projection iterations of the\n"
     "                    final stage (default 8, 8; the paper used 5, 5)\n"
     "  --prior S,W,Y     prior motion error (default 0,0,0)\n"
+    "  --surge-sigma S   scale of a prior on the surge error (m; the nominal\n"
+    "                    step's accuracy, e.g. a plotter's; default none): ranks\n"
+    "                    the global stage's candidates one phase-centre spacing\n"
+    "                    apart, which look alike on compact scenes at a squint\n"
     "  --no-global       skip the global stage (local search from the prior)\n"
     "  --box S,W,Y       half-widths of the search box around the prior (m, m,\n"
     "                    rad; default 0.06, 0.035 and the grating-lobe-safe yaw)\n"
@@ -66,11 +71,12 @@ int cmd_pair(int argc, char **argv)
         {"range", required_argument, 0, 'R'}, {"threads", required_argument, 0, 't'},
         {"lag-model", required_argument, 0, 'L'}, {"box", required_argument, 0, 'b'},
         {"yaw-sigma", required_argument, 0, 'y'}, {"fix-yaw", no_argument, 0, 'F'},
-        {"cross-extent", required_argument, 0, 'X'},
+        {"cross-extent", required_argument, 0, 'X'}, {"surge-sigma", required_argument, 0, 'U'},
         {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
     long p = 0, q = 1, k = 8, iters = 8, nsub = 1, threads = 0;
     int json = 0, no_global = 0, have_p = 0, have_q = 0, motion_lag = 0, fix_yaw = 0;
-    double prior[3] = {0, 0, 0}, range = NAN, box[3] = {NAN, NAN, NAN}, yaw_sigma = 0, cross_extent = 0;
+    double prior[3] = {0, 0, 0}, range = NAN, box[3] = {NAN, NAN, NAN}, yaw_sigma = 0, cross_extent = 0,
+           surge_sigma = 0;
     int opt;
     optind = 1;
     while ((opt = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
@@ -94,6 +100,10 @@ int cmd_pair(int argc, char **argv)
         case 'y':
             if (cli_parse_double(optarg, &yaw_sigma) || !(yaw_sigma >= 0))
                 return cli_fail("pair", 0, "--yaw-sigma needs a standard deviation >= 0 (rad)");
+            break;
+        case 'U':
+            if (cli_parse_double(optarg, &surge_sigma) || !(surge_sigma >= 0))
+                return cli_fail("pair", 0, "--surge-sigma needs a scale >= 0 (m)");
             break;
         case 'S': if (cli_parse_int(optarg, 1, 64, &nsub)) return cli_fail("pair", 0, "--subintervals needs 1..64"); break;
         case 'R': if (cli_parse_double(optarg, &range) || !(range > 0)) return cli_fail("pair", 0, "--range needs a positive number"); break;
@@ -145,6 +155,7 @@ int cmd_pair(int argc, char **argv)
     if (!isnan(box[0])) po.box = (sasnav_pose){box[0], box[1], box[2]};
     po.nthreads = (int)threads;
     po.yaw_sigma = yaw_sigma;
+    po.surge_sigma = surge_sigma;
     po.fix_yaw = fix_yaw;
     if (cross_extent > 0) po.cross_extent = cross_extent;
     double extent = po.range_extent;

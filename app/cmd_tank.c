@@ -9,7 +9,8 @@
 int cmd_tank(int argc, char **argv);
 
 static const char *help =
-    "usage: sasnav tank -o DIR [--seed N] [--omni]\n"
+    "usage: sasnav tank -o DIR [--seed N] [--omni] [--clutter STD] [--plate-range R]\n"
+    "                  [--noise STD]\n"
     "\n"
     "Simulates the tank experiment of SPEC 4 (8 Rx of 5 cm spaced 5 cm, Tx at\n"
     "the array midpoint, 32 pings at 2.5 cm steps with stepping errors, a surge\n"
@@ -28,12 +29,20 @@ static const char *help =
     "  --seed N    seed of the stepping errors, clutter and noise (default 1)\n"
     "  --omni      omnidirectional elements (default: the 5 cm elements'\n"
     "              line-aperture patterns at 105 kHz)\n"
+    "  --clutter STD      amplitude std of the plate's 200 point scatterers\n"
+    "                     (its texture; default 0.02 against reflectors of 1)\n"
+    "  --plate-range R    range of the plate centre (m, default 1.5); the\n"
+    "                     reflectors keep their place on the plate\n"
+    "  --noise STD        white noise std per passband sample (default 1e-3)\n"
     "  -o DIR      output directory (created if missing)\n";
 
 int cmd_tank(int argc, char **argv)
 {
     static const struct option longopts[] = {{"seed", required_argument, 0, 's'},
                                               {"omni", no_argument, 0, 'O'},
+                                              {"clutter", required_argument, 0, 'c'},
+                                              {"plate-range", required_argument, 0, 'r'},
+                                              {"noise", required_argument, 0, 'n'},
                                               {"output", required_argument, 0, 'o'},
                                               {"help", no_argument, 0, 'h'},
                                               {0, 0, 0, 0}};
@@ -41,6 +50,7 @@ int cmd_tank(int argc, char **argv)
     sasnav_tank_params p;
     sasnav_tank_default(&p);
     long v;
+    double d;
     int opt;
     optind = 1;
     while ((opt = getopt_long(argc, argv, "s:o:h", longopts, NULL)) != -1) {
@@ -51,6 +61,23 @@ int cmd_tank(int argc, char **argv)
             p.seed = (uint64_t)v;
             break;
         case 'O': p.directivity = 0; break;
+        case 'c':
+            if (cli_parse_double(optarg, &d) || !(d >= 0))
+                return cli_fail("tank", 0, "--clutter needs a non-negative amplitude std");
+            p.clutter_std = d;
+            break;
+        case 'r':
+            if (cli_parse_double(optarg, &d) || !(d > p.plate_radius) || !(d < p.range_max - p.plate_radius))
+                return cli_fail("tank", 0, "--plate-range needs a range keeping the plate in %g..%g m",
+                                p.plate_radius, p.range_max);
+            for (int i = 0; i < p.n_reflectors; i++) p.refl_y[i] += d - p.plate_y;
+            p.plate_y = d;
+            break;
+        case 'n':
+            if (cli_parse_double(optarg, &d) || !(d >= 0))
+                return cli_fail("tank", 0, "--noise needs a non-negative std");
+            p.noise_std = d;
+            break;
         case 'o': output = optarg; break;
         case 'h': fputs(help, stdout); return 0;
         default: fputs(help, stderr); return 2;

@@ -18,7 +18,8 @@
 
 static const char *help =
     "usage: sasnav validate run.h5 -o DIR [--k-min K] [--k-max K]\n"
-    "                       [--fix-yaw | --yaw-sigma S] [--long-baselines] [--k K] [--i I]\n"
+    "                       [--fix-yaw | --yaw-sigma S] [--surge-sigma S] [--long-baselines]\n"
+    "                       [--k K] [--i I]\n"
     "                       [--grid X0,X1,NX,Y0,Y1,NY] [--threads N] [--json]\n"
     "\n"
     "The validation method of the paper's tank experiment (Sec. V): from a run\n"
@@ -45,6 +46,9 @@ static const char *help =
     "  --k-min K, --k-max K  overlaps to test (default 4 .. the run's own)\n"
     "  --fix-yaw          hold every pair's yaw error at 0 (rail, plotter)\n"
     "  --yaw-sigma S      prior on the pair yaw error (rad; default none)\n"
+    "  --surge-sigma S    scale of a prior on the pair surge error (m; the\n"
+    "                     plotter's step accuracy; default none; the tank:\n"
+    "                     0.025, see docs/validation.md)\n"
     "  --long-baselines   also estimate the pairs two steps apart within each\n"
     "                     sub-sampled run (where they share phase centres) and\n"
     "                     combine by least squares\n"
@@ -249,9 +253,12 @@ static int write_report(const char *dir, const char *input, const sasnav_validat
     fprintf(f, "Paper Sec. V: %d pings; sub-sampled runs with K = %d..%d shared phase centres, all "
                "phases%s, combined per K (phases other than the reference placed by a rigid "
                "least-squares fit on the largest K's trajectory, which is rotated by its fitted "
-               "track angle). Pair yaw: %s.\n\n",
+               "track angle). Pair yaw: %s.",
             v->n_pings, v->k[v->n_k - 1].k, v->k[0].k,
             vo->nav.long_baselines ? " (with the pairs two steps apart, least squares)" : "", mode);
+    if (vo->nav.pair.surge_sigma > 0)
+        fprintf(f, " Surge prior (--surge-sigma): %.4g m.", vo->nav.pair.surge_sigma);
+    fputs("\n\n", f);
     fprintf(f, "| K | stride | pairs | failed | track angle (rad) |%s time (s) |\n",
             v->has_truth ? " rms surge / sway vs truth (mm) |" : "");
     fprintf(f, "|---|---|---|---|---|%s---|\n", v->has_truth ? "---|" : "");
@@ -287,7 +294,7 @@ int cmd_validate(int argc, char **argv)
     static const struct option longopts[] = {
         {"k-min", required_argument, 0, 'a'}, {"k-max", required_argument, 0, 'b'},
         {"fix-yaw", no_argument, 0, 'F'},     {"yaw-sigma", required_argument, 0, 'y'},
-        {"long-baselines", no_argument, 0, 'L'},
+        {"long-baselines", no_argument, 0, 'L'}, {"surge-sigma", required_argument, 0, 'U'},
         {"k", required_argument, 0, 'k'},     {"i", required_argument, 0, 'i'},
         {"grid", required_argument, 0, 'g'},  {"threads", required_argument, 0, 't'},
         {"json", no_argument, 0, 'j'},        {"output", required_argument, 0, 'o'},
@@ -307,6 +314,10 @@ int cmd_validate(int argc, char **argv)
         case 'y':
             if (cli_parse_double(optarg, &vo.nav.pair.yaw_sigma) || !(vo.nav.pair.yaw_sigma >= 0))
                 return cli_fail("validate", 0, "--yaw-sigma needs a standard deviation >= 0 (rad)");
+            break;
+        case 'U':
+            if (cli_parse_double(optarg, &vo.nav.pair.surge_sigma) || !(vo.nav.pair.surge_sigma >= 0))
+                return cli_fail("validate", 0, "--surge-sigma needs a scale >= 0 (m)");
             break;
         case 'k': if (cli_parse_int(optarg, 1, 100, &k)) return cli_fail("validate", 0, "--k needs 1..100"); break;
         case 'i': if (cli_parse_int(optarg, 1, 100, &iters)) return cli_fail("validate", 0, "--i needs 1..100"); break;

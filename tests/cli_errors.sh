@@ -127,6 +127,11 @@ expect_fail "validate two yaw models" "" "$SASNAV" validate "$T/pair.h5" --fix-y
 expect_fail "validate K above the run's" "" "$SASNAV" validate "$T/pair.h5" --k-max 12 -o "$T/val"
 expect_fail "tank preset with --snr" "" "$SASNAV" simulate --preset tank --snr 10 -o "$T/tankrec"
 expect_fail "pair negative yaw sigma" "" "$SASNAV" pair "$T/pair.h5" --yaw-sigma -1
+expect_fail "pair negative surge sigma" "" "$SASNAV" pair "$T/pair.h5" --surge-sigma -1
+expect_fail "validate surge sigma not a number" "" "$SASNAV" validate "$T/pair.h5" --surge-sigma x -o "$T/val"
+expect_fail "tank negative clutter" "" "$SASNAV" tank --clutter -1 -o "$T/tankrec"
+expect_fail "tank plate beyond the record" "" "$SASNAV" tank --plate-range 5 -o "$T/tankrec"
+expect_fail "ingest wav negative range" "" "$SASNAV" ingest --wav "$T/tankrec" --range -1 -o "$T/tank.h5"
 expect_fail "navigate first pose and anchor" "" "$SASNAV" navigate "$T/pair.h5" --first-pose 0,0,0 --anchor-truth -o "$T/nav.h5"
 
 ls "$T" | grep -q 'tmp-' && { echo "FAIL temporary files left: $(ls "$T")"; fails=$((fails + 1)); }

@@ -71,6 +71,15 @@ typedef struct {
                               of the valley one phase-centre spacing d of
                               surge and d / R of yaw apart look alike when
                               the scene spans little range. */
+    double surge_sigma;    /* m, scale of a prior on the surge error (the
+                              nominal step's accuracy: a plotter, a DVL),
+                              0 = none (default). The global stage ranks
+                              its candidates by zeta (1 + (surge / sigma)^2):
+                              on compact scenes seen at a squint the
+                              candidates one spacing d apart along the
+                              weakly observed direction look alike and
+                              zeta leans to the one sharing more phase
+                              centres (docs/estimator.md). */
     int fix_yaw;           /* 1: hold the yaw error at prior.theta and estimate
                               surge and sway only (a rail or plotter, or a
                               gyro far better than the scene's yaw

@@ -197,6 +197,7 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
         !(o->range_extent > 0) || !(o->cross_extent >= 0) || !(o->tx_lag >= 0) ||
         !isfinite(o->range + o->range_extent + o->cross_extent + o->tx_lag + o->blur) ||
         !(o->blur >= 0) || !(o->yaw_sigma >= 0) || !isfinite(o->yaw_sigma) ||
+        !(o->surge_sigma >= 0) || !isfinite(o->surge_sigma) ||
         !(o->box.x >= 0 && o->box.y >= 0 && o->box.theta >= 0)) {
         free(pr);
         return sasnav_set_error(SASNAV_ERR_ARG, "invalid estimator options");

@@ -27,6 +27,7 @@
 typedef struct {
     sasnav_pair *pr;
     int level, blurred, use_eta;
+    int use_prior;          /* weight by the surge prior (opts.surge_sigma) */
     int ndim;               /* 3, or 2 with the yaw held (opts.fix_yaw) */
     sasnav_pose centre, scale;
     int rc;
@@ -38,6 +39,16 @@ static sasnav_pose from_unit(const stage_ctx *c, const double *u)
     sasnav_pose e = {c->centre.x + c->scale.x * u[0], c->centre.y + c->scale.y * u[1],
                      c->centre.theta + (c->ndim > 2 ? c->scale.theta * u[2] : 0.0)};
     return e;
+}
+
+/* The factor 1 + (surge offset / surge_sigma)^2 of the surge prior (1
+ * without one). */
+static double surge_prior(const sasnav_pair *pr, sasnav_pose e)
+{
+    const sasnav_pair_opts *o = sasnav_pair_options(pr);
+    if (!(o->surge_sigma > 0)) return 1.0;
+    double u = (e.x - o->prior.x) / o->surge_sigma;
+    return 1.0 + u * u;
 }
 
 static double stage_objective(unsigned n, const double *u, double *grad, void *data)
@@ -54,7 +65,8 @@ static double stage_objective(unsigned n, const double *u, double *grad, void *d
         c->rc = rc;
         return HUGE_VAL;
     }
-    return c->use_eta ? eta : zeta;
+    if (c->use_eta) return eta;
+    return c->use_prior ? zeta * surge_prior(c->pr, from_unit(c, u)) : zeta;
 }
 
 /* Bounded local minimisation in units scaled so that one unit = one step;
@@ -178,24 +190,36 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
         n++;
         zs[it + nt] = z;
     }
-    /* The scan's local minima are the candidates; with a yaw prior each is
-     * weighted by 1 + (yaw offset / sigma)^2. The ratio of the two lowest
-     * minima measures how well the data alone resolve the valley. */
+    /* The candidates are the local minima of the scan's zeta weighted by
+     * the priors: 1 + (yaw offset / yaw_sigma)^2 and 1 + (surge offset /
+     * surge_sigma)^2 (each where given). The ratio of the two lowest minima
+     * of zeta itself measures how well the data alone resolve the valley. */
     double fbest = HUGE_VAL, sbest = HUGE_VAL, z1 = HUGE_VAL, z2 = HUGE_VAL;
     sasnav_pose arg = hyp;
+    double *score = malloc(sizeof(double) * (size_t)ns);
+    if (!score) {
+        free(zs);
+        free(es);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the valley scan");
+    }
     for (int j = 0; j < ns; j++) {
+        score[j] = zs[j];
         if (!(zs[j] < HUGE_VAL)) continue;
-        if ((j > 0 && zs[j - 1] < zs[j]) || (j + 1 < ns && zs[j + 1] <= zs[j])) continue;
-        double score = zs[j];
         if (o->yaw_sigma > 0) {
             double u = (es[j].theta - c.theta) / o->yaw_sigma;
-            score *= 1.0 + u * u;
+            score[j] *= 1.0 + u * u;
         }
-        if (score < sbest) {
-            sbest = score;
+        score[j] *= surge_prior(pr, es[j]);
+    }
+    for (int j = 0; j < ns; j++) {
+        if (!(zs[j] < HUGE_VAL)) continue;
+        if (!((j > 0 && score[j - 1] < score[j]) || (j + 1 < ns && score[j + 1] <= score[j])) &&
+            score[j] < sbest) {
+            sbest = score[j];
             fbest = zs[j];
             arg = es[j];
         }
+        if ((j > 0 && zs[j - 1] < zs[j]) || (j + 1 < ns && zs[j + 1] <= zs[j])) continue;
         if (zs[j] < z1) {
             z2 = z1;
             z1 = zs[j];
@@ -203,11 +227,12 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
             z2 = zs[j];
         }
     }
+    free(score);
     free(zs);
     free(es);
     *ambiguity = z2 < HUGE_VAL && z2 > 0 ? z1 / z2 : 0.0;
     /* Local refinement of zeta at level 0 around the best valley point. */
-    stage_ctx ctx = {.pr = pr, .level = 0};
+    stage_ctx ctx = {.pr = pr, .level = 0, .use_prior = 1};
     sasnav_pose unit = {pc_spacing, pc_spacing, pc_spacing / o->range};
     sasnav_pose refined;
     double fr;
@@ -217,7 +242,7 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     rc = local_stage(&ctx, arg, unit, hw, 0.02, o->max_evaluations, &refined, &fr);
     n += ctx.evals;
     if (rc && rc != SASNAV_ERR_NOT_CONVERGED) return rc;
-    *best = fr < fbest ? refined : arg;
+    *best = fr < fbest * surge_prior(pr, arg) ? refined : arg;
     *evals = n;
     return SASNAV_OK;
 }
@@ -261,7 +286,10 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     /* Zeta stage (level 1: full pixels, coarse iterations): steps of a
      * fifth of a phase-centre spacing in surge and sway, and the yaw that
      * moves the scene by as much at the grid's range. */
-    stage_ctx ctx = {.pr = pr, .level = 1};
+    /* With a surge prior the stage minimises zeta times its factor, so that
+     * it stays with the candidate the global stage chose; the zeta reported
+     * is the data's. */
+    stage_ctx ctx = {.pr = pr, .level = 1, .use_prior = 1};
     sasnav_pose zstep = {0.2 * pc_spacing, 0.2 * pc_spacing, 0.2 * pc_spacing / range};
     sasnav_pose zbest;
     double zval;
@@ -269,6 +297,7 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     res->evaluations_zeta = ctx.evals;
     if (zrc && zrc != SASNAV_ERR_NOT_CONVERGED) return zrc;
     res->zeta_stage = zbest;
+    if (o->surge_sigma > 0) zval /= surge_prior(pr, zbest);
     res->zeta = zval;
 
     /* Eta stage, first at level 1 then at level 2 (final k, i): steps of
