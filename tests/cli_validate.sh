@@ -27,7 +27,7 @@ done
 i=14
 while [ "$i" -lt 32 ]; do rm -f "$T/rec/ping_0$(printf %02d "$i").wav"; i=$((i + 1)); done
 "$CLI" ingest --wav "$T/rec" -o "$T/tank.h5" 2> "$T/ing.err" || { cat "$T/ing.err" >&2; fail "ingest --wav"; exit 1; }
-if "$CLI" validate "$T/tank.h5" --fix-yaw --k-min 7 --k 2 --i 1 --json -o "$T/val" > "$T/val.json" 2> "$T/val.err"; then
+if "$CLI" validate "$T/tank.h5" --fix-yaw --surge-sigma 0.025 --k-min 7 --k 2 --i 1 --json -o "$T/val" > "$T/val.json" 2> "$T/val.err"; then
     for key in surge_jump_error yaw_error sway_spread surge_spread min_image_correlation; do
         grep -q "\"$key\"" "$T/val.json" || fail "JSON lacks \"$key\""
     done
@@ -36,6 +36,7 @@ if "$CLI" validate "$T/tank.h5" --fix-yaw --k-min 7 --k 2 --i 1 --json -o "$T/va
         [ -s "$T/val/$f" ] || fail "validate wrote no $f"
     done
     ls "$T/val" | grep -q 'tmp' && fail "temporary files left in the output directory"
+    grep -q "Surge prior (--surge-sigma): 0.025 m" "$T/val/report.md" || fail "report.md does not state the surge prior"
     # values: jump within 1 mm, array yaw within 2e-3 rad (awk reads the JSON lines)
     awk -F': ' '/"surge_jump_error"/ { gsub(/,/, "", $2); j = $2 }
                 /"yaw_error"/ { gsub(/,/, "", $2); y = $2 }
