@@ -261,7 +261,11 @@ int cmd_pair(int argc, char **argv)
         }
         printf("displacement   x %.6f m   y %.6f m   theta %.6e rad\n", r->displacement.x, r->displacement.y,
                r->displacement.theta);
-        if (r->ambiguity > 0.8)
+        if (r->ambiguity > 0.8 && fix_yaw)
+            printf("ambiguity %.2f: the second surge candidate, a phase-centre spacing away, is nearly "
+                   "as good (compact scene at a squint?%s)\n", r->ambiguity,
+                   surge_sigma > 0 ? "" : " consider --surge-sigma");
+        else if (r->ambiguity > 0.8)
             printf("ambiguity %.2f: the second surge-yaw candidate of the valley is nearly as good "
                    "(compact scene? consider --yaw-sigma)\n", r->ambiguity);
         printf("zeta %.4g  eta %.4g  overlap %.3g  evaluations %d (global %d, zeta %d, eta %d)  "
