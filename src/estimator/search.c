@@ -23,6 +23,8 @@
 #define SCAN_LEVEL 1
 #endif
 #define HW10 ((sasnav_pose){10.0, 10.0, 10.0})
+/* zeta ratio of the scan's two best minima above which both are refined */
+#define AMBIGUOUS 0.8
 
 typedef struct {
     sasnav_pair *pr;
@@ -125,7 +127,7 @@ static sasnav_pose valley_point(const sasnav_pair *pr, sasnav_pose hyp_disp, dou
 }
 
 static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, int *evals,
-                        double *ambiguity)
+                        double *ambiguity, sasnav_pose *second, int *has_second)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
     const pair_level *lv = &pr->level[0];
@@ -194,8 +196,8 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
      * the priors: 1 + (yaw offset / yaw_sigma)^2 and 1 + (surge offset /
      * surge_sigma)^2 (each where given). The ratio of the two lowest minima
      * of zeta itself measures how well the data alone resolve the valley. */
-    double fbest = HUGE_VAL, sbest = HUGE_VAL, z1 = HUGE_VAL, z2 = HUGE_VAL;
-    sasnav_pose arg = hyp;
+    double fbest = HUGE_VAL, sbest = HUGE_VAL, sbest2 = HUGE_VAL, z1 = HUGE_VAL, z2 = HUGE_VAL;
+    sasnav_pose arg = hyp, arg2 = hyp;
     double *score = malloc(sizeof(double) * (size_t)ns);
     if (!score) {
         free(zs);
@@ -213,11 +215,17 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     }
     for (int j = 0; j < ns; j++) {
         if (!(zs[j] < HUGE_VAL)) continue;
-        if (!((j > 0 && score[j - 1] < score[j]) || (j + 1 < ns && score[j + 1] <= score[j])) &&
-            score[j] < sbest) {
-            sbest = score[j];
-            fbest = zs[j];
-            arg = es[j];
+        if (!((j > 0 && score[j - 1] < score[j]) || (j + 1 < ns && score[j + 1] <= score[j]))) {
+            if (score[j] < sbest) {
+                sbest2 = sbest;
+                arg2 = arg;
+                sbest = score[j];
+                fbest = zs[j];
+                arg = es[j];
+            } else if (score[j] < sbest2) {
+                sbest2 = score[j];
+                arg2 = es[j];
+            }
         }
         if ((j > 0 && zs[j - 1] < zs[j]) || (j + 1 < ns && zs[j + 1] <= zs[j])) continue;
         if (zs[j] < z1) {
@@ -231,6 +239,8 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     free(zs);
     free(es);
     *ambiguity = z2 < HUGE_VAL && z2 > 0 ? z1 / z2 : 0.0;
+    *second = arg2;
+    *has_second = sbest2 < HUGE_VAL;
     /* Local refinement of zeta at level 0 around the best valley point. */
     stage_ctx ctx = {.pr = pr, .level = 0, .use_prior = 1};
     sasnav_pose unit = {pc_spacing, pc_spacing, pc_spacing / o->range};
@@ -247,42 +257,19 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     return SASNAV_OK;
 }
 
-int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
+typedef struct {
+    sasnav_pose zeta_stage, error;
+    double zeta, eta;
+    int evaluations_zeta, evaluations_eta, zrc, erc;
+} refine_out;
+
+/* Stages 1 and 2 from `start` (a global-stage candidate). */
+static int refine(sasnav_pair *pr, sasnav_pose start, double pc_spacing, refine_out *out)
 {
-    if (!pr || !res) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
-    memset(res, 0, sizeof *res);
-    if (!pr->ready) return sasnav_set_error(SASNAV_ERR_ARG, "estimator has no data (call set_data)");
-    double t0 = sasnav_now_seconds();
-    long apps0 = pr->applications;
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
-    double lambda = sasnav_wavelength(&pr->sys);
-    double range = o->range;
-    double pc_spacing = pr->array.n_rx > 1 ? fabs(pr->array.rx_u[1] - pr->array.rx_u[0]) / 2.0 : 0.025;
-
-    /* Overlap check at the prior. */
-    double ov = 0;
-    /* Level 1 (full pixels): at coarse pixels truncated CGLS rescales the
-     * faint sidelobe-lit part of a grid and the kept energy stays high even
-     * for pings metres apart. */
-    int rc = sasnav_pair_eval(pr, o->prior, 1, 0, NULL, NULL, &ov);
-    if (rc) return rc;
-    if (!(ov >= o->min_overlap)) {
-        res->status = SASNAV_ERR_NO_OVERLAP;
-        res->overlap = ov;
-        return sasnav_set_error(SASNAV_ERR_NO_OVERLAP,
-                                "pings share no observed scene at the prior (kept energy %.2g < %.2g)",
-                                ov, o->min_overlap);
-    }
-
-    sasnav_pose start = o->prior;
-    int nglob = 0;
-    if (o->global_stage) {
-        rc = global_stage(pr, pc_spacing, &start, &nglob, &res->ambiguity);
-        if (rc) return rc;
-    }
-    res->global_stage = start;
-    res->evaluations_global = nglob;
-
+    double lambda = sasnav_wavelength(&pr->sys), range = o->range;
+    int rc;
+    memset(out, 0, sizeof *out);
     /* Zeta stage (level 1: full pixels, coarse iterations): steps of a
      * fifth of a phase-centre spacing in surge and sway, and the yaw that
      * moves the scene by as much at the grid's range. */
@@ -294,11 +281,12 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     sasnav_pose zbest;
     double zval;
     int zrc = local_stage(&ctx, start, zstep, HW10, 0.01, o->max_evaluations, &zbest, &zval);
-    res->evaluations_zeta = ctx.evals;
+    out->evaluations_zeta = ctx.evals;
+    out->zrc = zrc;
     if (zrc && zrc != SASNAV_ERR_NOT_CONVERGED) return zrc;
-    res->zeta_stage = zbest;
+    out->zeta_stage = zbest;
     if (o->surge_sigma > 0) zval /= surge_prior(pr, zbest);
-    res->zeta = zval;
+    out->zeta = zval;
 
     /* Eta stage, first at level 1 then at level 2 (final k, i): steps of
      * lambda/40 in sway (bounds +-lambda/4: one fringe), a 25th of the
@@ -345,9 +333,76 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
         best = b;
         fbest = f;
     }
-    res->evaluations_eta = nevals;
-    res->eta = fbest;
-    res->error = best;
+    out->evaluations_eta = nevals;
+    out->eta = fbest;
+    out->error = best;
+    out->erc = erc;
+    return SASNAV_OK;
+}
+
+int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
+{
+    if (!pr || !res) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    memset(res, 0, sizeof *res);
+    if (!pr->ready) return sasnav_set_error(SASNAV_ERR_ARG, "estimator has no data (call set_data)");
+    double t0 = sasnav_now_seconds();
+    long apps0 = pr->applications;
+    const sasnav_pair_opts *o = sasnav_pair_options(pr);
+    double pc_spacing = pr->array.n_rx > 1 ? fabs(pr->array.rx_u[1] - pr->array.rx_u[0]) / 2.0 : 0.025;
+
+    /* Overlap check at the prior. */
+    double ov = 0;
+    /* Level 1 (full pixels): at coarse pixels truncated CGLS rescales the
+     * faint sidelobe-lit part of a grid and the kept energy stays high even
+     * for pings metres apart. */
+    int rc = sasnav_pair_eval(pr, o->prior, 1, 0, NULL, NULL, &ov);
+    if (rc) return rc;
+    if (!(ov >= o->min_overlap)) {
+        res->status = SASNAV_ERR_NO_OVERLAP;
+        res->overlap = ov;
+        return sasnav_set_error(SASNAV_ERR_NO_OVERLAP,
+                                "pings share no observed scene at the prior (kept energy %.2g < %.2g)",
+                                ov, o->min_overlap);
+    }
+
+    sasnav_pose start = o->prior, second = o->prior;
+    int nglob = 0, has_second = 0;
+    if (o->global_stage) {
+        rc = global_stage(pr, pc_spacing, &start, &nglob, &res->ambiguity, &second, &has_second);
+        if (rc) return rc;
+    }
+    res->global_stage = start;
+    res->evaluations_global = nglob;
+
+    refine_out r1, r2;
+    rc = refine(pr, start, pc_spacing, &r1);
+    if (rc) return rc;
+    /* When the scan's two best candidates are nearly alike in zeta, both are
+     * carried through the eta stage and the lower final eta decides: at the
+     * tank's track ends zeta prefers the candidate one phase-centre spacing
+     * short (one more shared phase centre) while eta there is 3-6x higher
+     * than at the right one (docs/estimator.md). */
+    if (has_second && res->ambiguity > AMBIGUOUS) {
+        rc = refine(pr, second, pc_spacing, &r2);
+        if (rc) return rc;
+        r1.evaluations_zeta += r2.evaluations_zeta;
+        r1.evaluations_eta += r2.evaluations_eta;
+        if (r2.eta < r1.eta) {
+            int ez = r1.evaluations_zeta, ee = r1.evaluations_eta;
+            r1 = r2;
+            r1.evaluations_zeta = ez;
+            r1.evaluations_eta = ee;
+            res->global_stage = second;
+        }
+    }
+    res->evaluations_zeta = r1.evaluations_zeta;
+    res->zeta_stage = r1.zeta_stage;
+    res->zeta = r1.zeta;
+    res->evaluations_eta = r1.evaluations_eta;
+    res->eta = r1.eta;
+    res->error = r1.error;
+    sasnav_pose best = r1.error;
+    int zrc = r1.zrc, erc = r1.erc;
     res->displacement = (sasnav_pose){pr->nominal.x + best.x, pr->nominal.y + best.y,
                                       pr->nominal.theta + best.theta};
     rc = sasnav_pair_eval(pr, best, PAIR_LEVELS - 1, 0, NULL, NULL, &res->overlap);
