@@ -20,7 +20,9 @@
  *   lower there: one more phase centre shared), with the plotter's surge
  *   prior (opts.surge_sigma = d): within d / 2 again, and the jump pair
  *   (11, 12), 17 mm off the nominal step and so penalised by the prior,
- *   still within 0.5 mm. */
+ *   still within 0.5 mm; (3, 6) also without the prior, where the scan's
+ *   two candidates are alike in zeta and the lower final eta picks the
+ *   right one. */
 #include "sasnav/error.h"
 #include "sasnav/estimator.h"
 #include "sasnav/tank.h"
@@ -93,6 +95,7 @@ int main(void)
     p.seed = 4;
     run = test_tank_run(&p);
     if (!run) return test_summary("test_tank_pairs");
+    check_pair(run, 3, 6, 0.5 * d, 0.0); /* no prior: the eta tie-break alone */
     check_pair(run, 24, 28, 0.5 * d, d);
     check_pair(run, 3, 6, 0.5 * d, d);
     check_pair(run, 28, 31, 0.5 * d, d);
