@@ -31,14 +31,6 @@
 #include <math.h>
 #include <stdio.h>
 
-#ifdef SASNAV_TEST_SANITIZED
-#define EST_K 2 /* coarse iterations keep the sanitized build inside its budget */
-#define EST_I 1
-#else
-#define EST_K 8
-#define EST_I 8
-#endif
-
 static void check_pair(const sasnav_run *run, int p, int q, double bound, double surge_sigma)
 {
     sasnav_pair_opts po;

@@ -27,13 +27,6 @@
 #include <string.h>
 
 #define N_PINGS 16
-#ifdef SASNAV_TEST_SANITIZED
-#define EST_K 2 /* coarse iterations keep the sanitized build inside its budget */
-#define EST_I 1
-#else
-#define EST_K 8
-#define EST_I 8
-#endif
 
 static void test_subset(const sasnav_run *run)
 {

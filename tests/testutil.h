@@ -38,4 +38,14 @@ const char *test_tmpdir(void);
  * (CHECKs each step; NULL on failure). Free with sasnav_run_free. */
 sasnav_run *test_tank_run(const sasnav_tank_params *p);
 
+/* Final-stage estimator iterations for the tests that run whole searches:
+ * coarse ones keep the sanitized build inside its time budget. */
+#ifdef SASNAV_TEST_SANITIZED
+#define EST_K 2
+#define EST_I 1
+#else
+#define EST_K 8
+#define EST_I 8
+#endif
+
 #endif

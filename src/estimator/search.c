@@ -377,6 +377,7 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     refine_out r1, r2;
     rc = refine(pr, start, pc_spacing, &r1);
     if (rc) return rc;
+    int nzeta = r1.evaluations_zeta, neta = r1.evaluations_eta;
     /* When the scan's two best candidates are nearly alike in zeta, both are
      * carried through the eta stage and the lower final eta decides: at the
      * tank's track ends zeta prefers the candidate one phase-centre spacing
@@ -385,20 +386,17 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     if (has_second && res->ambiguity > AMBIGUOUS) {
         rc = refine(pr, second, pc_spacing, &r2);
         if (rc) return rc;
-        r1.evaluations_zeta += r2.evaluations_zeta;
-        r1.evaluations_eta += r2.evaluations_eta;
+        nzeta += r2.evaluations_zeta;
+        neta += r2.evaluations_eta;
         if (r2.eta < r1.eta) {
-            int ez = r1.evaluations_zeta, ee = r1.evaluations_eta;
             r1 = r2;
-            r1.evaluations_zeta = ez;
-            r1.evaluations_eta = ee;
             res->global_stage = second;
         }
     }
-    res->evaluations_zeta = r1.evaluations_zeta;
+    res->evaluations_zeta = nzeta;
     res->zeta_stage = r1.zeta_stage;
     res->zeta = r1.zeta;
-    res->evaluations_eta = r1.evaluations_eta;
+    res->evaluations_eta = neta;
     res->eta = r1.eta;
     res->error = r1.error;
     sasnav_pose best = r1.error;
