@@ -450,22 +450,6 @@ static void test_locale(const char *dir)
     setlocale(LC_NUMERIC, "C");
 }
 
-/* Removes the test's files (flat directory) unless asked to keep them. */
-static void remove_tmpdir(const char *dir)
-{
-    DIR *d = opendir(dir);
-    if (!d) return;
-    struct dirent *e;
-    char path[1200];
-    while ((e = readdir(d))) {
-        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        unlink(path);
-    }
-    closedir(d);
-    rmdir(dir);
-}
-
 int main(void)
 {
     find_source_dir();
@@ -477,9 +461,5 @@ int main(void)
     test_good_variants(dir);
     test_round_trip(dir);
     test_locale(dir);
-    if (getenv("SASNAV_KEEP_TMP"))
-        printf("files kept in %s\n", dir);
-    else
-        remove_tmpdir(dir);
     return test_summary("test_config");
 }

@@ -879,31 +879,6 @@ static void test_run_container(void)
     sasnav_run_free(NULL);
 }
 
-/* Removes a directory tree (no symbolic links are followed). */
-static void remove_tree(const char *path)
-{
-    struct stat st;
-    if (lstat(path, &st) != 0) return;
-    if (S_ISDIR(st.st_mode)) {
-        DIR *d = opendir(path);
-        struct dirent *e;
-        while (d && (e = readdir(d))) {
-            if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-            char child[1024];
-            snprintf(child, sizeof child, "%s/%s", path, e->d_name);
-            remove_tree(child);
-        }
-        if (d) closedir(d);
-    }
-    remove(path);
-}
-
-/* Removes the test directory after a successful run (kept on failure). */
-static void remove_test_dir(void)
-{
-    if (test_failures == 0) remove_tree(test_tmpdir());
-}
-
 int main(void)
 {
     test_grid();
@@ -916,7 +891,5 @@ int main(void)
     test_writers_fail_cleanly();
     test_h5py();
     check_no_open_objects("end");
-    int status = test_summary("test_io");
-    remove_test_dir();
-    return status;
+    return test_summary("test_io");
 }

@@ -31,11 +31,9 @@
 #include "sasnav/io.h"
 #include "testutil.h"
 
-#include <dirent.h>
 #include <ctype.h>
 #include <errno.h>
 #include <execinfo.h>
-#include <sys/stat.h>
 #include <hdf5.h>
 #include <signal.h>
 #include <stdint.h>
@@ -526,31 +524,6 @@ static int make_bases(base_file *bases)
     return n;
 }
 
-/* Removes a directory tree (no symbolic links are followed). */
-static void remove_tree(const char *path)
-{
-    struct stat st;
-    if (lstat(path, &st) != 0) return;
-    if (S_ISDIR(st.st_mode)) {
-        DIR *d = opendir(path);
-        struct dirent *e;
-        while (d && (e = readdir(d))) {
-            if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-            char child[1024];
-            snprintf(child, sizeof child, "%s/%s", path, e->d_name);
-            remove_tree(child);
-        }
-        if (d) closedir(d);
-    }
-    remove(path);
-}
-
-/* Removes the test directory after a successful run (kept on failure). */
-static void remove_test_dir(void)
-{
-    if (test_failures == 0) remove_tree(test_tmpdir());
-}
-
 int main(void)
 {
     const char *env = getenv("SASNAV_FUZZ_VARIANTS");
@@ -583,7 +556,5 @@ int main(void)
         free(bases[k].base.data);
     }
     printf("fuzzing took %ld s\n", (long)(time(NULL) - start));
-    int status = test_summary("test_io_fuzz");
-    remove_test_dir();
-    return status;
+    return test_summary("test_io_fuzz");
 }

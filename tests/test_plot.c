@@ -275,22 +275,6 @@ static void test_quiet(const char *dir)
     unlink(log);
 }
 
-/* Removes the test's files (flat directory) unless asked to keep them. */
-static void remove_tmpdir(const char *dir)
-{
-    DIR *d = opendir(dir);
-    if (!d) return;
-    struct dirent *e;
-    char path[1200];
-    while ((e = readdir(d))) {
-        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        unlink(path);
-    }
-    closedir(d);
-    rmdir(dir);
-}
-
 int main(void)
 {
     const char *dir = test_tmpdir();
@@ -299,9 +283,5 @@ int main(void)
     test_map(dir);
     test_cleanup_on_failure(dir);
     test_quiet(dir);
-    if (getenv("SASNAV_KEEP_PLOTS"))
-        printf("plots kept in %s\n", dir);
-    else
-        remove_tmpdir(dir);
     return test_summary("test_plot");
 }

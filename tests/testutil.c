@@ -1,15 +1,42 @@
+#define _XOPEN_SOURCE 700 /* nftw */
 #include "testutil.h"
 
 #include "sasnav/error.h"
 
+#include <ftw.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 int test_failures = 0;
 int test_checks = 0;
 
+static char tmpdir[256];
+
+static int remove_entry(const char *path, const struct stat *sb, int flag, struct FTW *ftw)
+{
+    (void)sb;
+    (void)flag;
+    (void)ftw;
+    return remove(path) ? -1 : 0;
+}
+
+/* The test's directory goes after a clean run; it stays, and is named, after
+ * a failure or when SASNAV_KEEP_TMP is set. */
+static void cleanup_tmpdir(void)
+{
+    if (!tmpdir[0]) return;
+    if (test_failures || getenv("SASNAV_KEEP_TMP")) {
+        printf("files kept in %s\n", tmpdir);
+        return;
+    }
+    if (nftw(tmpdir, remove_entry, 16, FTW_DEPTH | FTW_PHYS)) perror(tmpdir);
+    tmpdir[0] = 0;
+}
+
 int test_summary(const char *name)
 {
+    cleanup_tmpdir();
     printf("%s: %d checks, %d failures\n", name, test_checks, test_failures);
     if (test_checks == 0) {
         printf("%s: no checks ran\n", name);
@@ -20,16 +47,15 @@ int test_summary(const char *name)
 
 const char *test_tmpdir(void)
 {
-    static char dir[256];
-    if (!dir[0]) {
+    if (!tmpdir[0]) {
         const char *base = getenv("TMPDIR");
-        snprintf(dir, sizeof dir, "%s/sasnav-test-XXXXXX", base ? base : "/tmp");
-        if (!mkdtemp(dir)) {
+        snprintf(tmpdir, sizeof tmpdir, "%s/sasnav-test-XXXXXX", base ? base : "/tmp");
+        if (!mkdtemp(tmpdir)) {
             perror("mkdtemp");
             exit(2);
         }
     }
-    return dir;
+    return tmpdir;
 }
 
 sasnav_run *test_tank_run(const sasnav_tank_params *p)

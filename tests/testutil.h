@@ -27,7 +27,9 @@ extern int test_checks;
         CHECK(rc_ == 0, "%s returned %d (%s)", #expr, rc_, sasnav_last_error()); \
     } while (0)
 
-/* Prints a summary and returns the process exit status (0 = pass). */
+/* Prints a summary and returns the process exit status (0 = pass); removes
+ * test_tmpdir() after a clean run (kept after a failure or with
+ * SASNAV_KEEP_TMP set). */
 int test_summary(const char *name);
 
 /* A fresh temporary directory for the test's files (created, mkdtemp). */
