@@ -285,7 +285,7 @@ static int refine(sasnav_pair *pr, sasnav_pose start, double pc_spacing, refine_
     out->zrc = zrc;
     if (zrc && zrc != SASNAV_ERR_NOT_CONVERGED) return zrc;
     out->zeta_stage = zbest;
-    if (o->surge_sigma > 0) zval /= surge_prior(pr, zbest);
+    zval /= surge_prior(pr, zbest); /* the data's zeta (factor 1 without a prior) */
     out->zeta = zval;
 
     /* Eta stage, first at level 1 then at level 2 (final k, i): steps of
