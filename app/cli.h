@@ -30,6 +30,7 @@ int cmd_navigate(int argc, char **argv);
 int cmd_demo(int argc, char **argv);
 int cmd_tank(int argc, char **argv);
 int cmd_validate(int argc, char **argv);
+int cmd_refine(int argc, char **argv);
 int cmd_ingest_wav(const char *dir, int decimation, double range, const char *output);
 
 #endif

@@ -19,7 +19,7 @@
 static const char *help =
     "usage: sasnav validate run.h5 -o DIR [--k-min K] [--k-max K]\n"
     "                       [--fix-yaw | --yaw-sigma S] [--surge-sigma S] [--long-baselines]\n"
-    "                       [--k K] [--i I]\n"
+    "                       [--k K] [--i I] [--refine [--sweeps N]]\n"
     "                       [--grid X0,X1,NX,Y0,Y1,NY] [--threads N] [--json]\n"
     "\n"
     "The validation method of the paper's tank experiment (Sec. V): from a run\n"
@@ -31,7 +31,10 @@ static const char *help =
     "receiver, all pings) and SIMO (every N-th ping, all receivers) apertures,\n"
     "images each with each trajectory and measures how well the complex\n"
     "images agree around the reflectors (docs/validation.md). On compact\n"
-    "scenes such as the tank, hold the pair yaws (--fix-yaw).\n"
+    "scenes such as the tank, hold the pair yaws (--fix-yaw). With --refine,\n"
+    "every phase's pair trajectory is refined on the phase's own pings by the\n"
+    "multi-ping data-domain fit of 'sasnav refine' (docs/navigation.md), and\n"
+    "the spreads of the pair trajectories alone are reported too.\n"
     "Writes into DIR:\n"
     "  validate.json       the summary (also on stdout with --json)\n"
     "  trajectories.csv    ping, K, along-track, cross-track, yaw (aligned)\n"
@@ -53,6 +56,8 @@ static const char *help =
     "                     sub-sampled run (where they share phase centres) and\n"
     "                     combine by least squares\n"
     "  --k K, --i I       estimator iterations of the final stage (default 8, 8)\n"
+    "  --refine           refine each phase on its own pings (see above)\n"
+    "  --sweeps N         refinement sweeps at most (default 4)\n"
     "  --grid ...         image grid (default: the track's extent x range of\n"
     "                     interest +-0.35 m, 5 mm pixels)\n"
     "  --threads N        OpenMP threads (default: all cores)\n"
@@ -76,7 +81,7 @@ static void join(char *buf, size_t n, const char *dir, const char *name)
     snprintf(buf, n, "%s/%s", dir, name);
 }
 
-static json_t *summary(const char *input, const sasnav_validation *v)
+static json_t *summary(const char *input, const sasnav_validation *v, int refined)
 {
     json_t *root = json_object();
     json_object_set_new(root, "input", json_string(input));
@@ -89,6 +94,9 @@ static json_t *summary(const char *input, const sasnav_validation *v)
     json_object_set_new(root, "yaw_error", num(v->yaw_error));
     json_object_set_new(root, "sway_spread", num(v->sway_spread));
     json_object_set_new(root, "surge_spread", num(v->surge_spread));
+    json_object_set_new(root, "refined", json_boolean(refined));
+    json_object_set_new(root, "sway_spread_pairs", num(v->sway_spread_pairs));
+    json_object_set_new(root, "surge_spread_pairs", num(v->surge_spread_pairs));
     json_object_set_new(root, "min_image_correlation", num(v->min_correlation));
     json_object_set_new(root, "min_image_correlation_siso", num(v->min_correlation_siso));
     json_object_set_new(root, "min_image_correlation_simo", num(v->min_correlation_simo));
@@ -108,6 +116,12 @@ static json_t *summary(const char *input, const sasnav_validation *v)
         if (v->has_truth)
             json_object_set_new(o, "rms_error", json_pack("{s:f,s:f,s:f}", "surge", vk->rms_error.x, "sway",
                                                           vk->rms_error.y, "yaw", vk->rms_error.theta));
+        if (v->has_truth)
+            json_object_set_new(o, "rms_error_pairs",
+                                json_pack("{s:f,s:f,s:f}", "surge", vk->rms_error_pairs.x, "sway",
+                                          vk->rms_error_pairs.y, "yaw", vk->rms_error_pairs.theta));
+        json_object_set_new(o, "refine_sweeps", json_integer(vk->refine_sweeps));
+        json_object_set_new(o, "refine_seconds", num(vk->refine_seconds));
         json_object_set_new(o, "seconds", num(vk->seconds));
         json_array_append_new(ks, o);
     }
@@ -258,20 +272,28 @@ static int write_report(const char *dir, const char *input, const sasnav_validat
             vo->nav.long_baselines ? " (with the pairs two steps apart, least squares)" : "", mode);
     if (vo->nav.pair.surge_sigma > 0)
         fprintf(f, " Surge prior (--surge-sigma): %.4g m.", vo->nav.pair.surge_sigma);
+    if (vo->refine)
+        fprintf(f, " Every phase refined on its own pings by the multi-ping data-domain fit "
+                   "(docs/navigation.md).");
     fputs("\n\n", f);
     fprintf(f, "| K | stride | pairs | failed | track angle (rad) |%s time (s) |\n",
-            v->has_truth ? " rms surge / sway vs truth (mm) |" : "");
-    fprintf(f, "|---|---|---|---|---|%s---|\n", v->has_truth ? "---|" : "");
+            v->has_truth ? " rms surge / sway vs truth (mm) | pairs alone (mm) |" : "");
+    fprintf(f, "|---|---|---|---|---|%s---|\n", v->has_truth ? "---|---|" : "");
     for (int k = 0; k < v->n_k; k++) {
         const sasnav_validate_k *vk = &v->k[k];
         fprintf(f, "| %d | %d | %d | %d | %+.4e |", vk->k, vk->stride, vk->n_pairs, vk->n_failed,
                 vk->track_angle);
-        if (v->has_truth) fprintf(f, " %.3f / %.3f |", 1e3 * vk->rms_error.x, 1e3 * vk->rms_error.y);
+        if (v->has_truth)
+            fprintf(f, " %.3f / %.3f | %.3f / %.3f |", 1e3 * vk->rms_error.x, 1e3 * vk->rms_error.y,
+                    1e3 * vk->rms_error_pairs.x, 1e3 * vk->rms_error_pairs.y);
         fprintf(f, " %.1f |\n", vk->seconds);
     }
     fprintf(f, "\nAgreement of the K trajectories: largest spread %.3f mm along track, %.3f mm across "
                "(paper: < 5 mm and < 0.5 mm).\n\n",
             1e3 * v->surge_spread, 1e3 * v->sway_spread);
+    if (vo->refine)
+        fprintf(f, "The pair trajectories alone (before refinement): %.3f mm along track, %.3f mm across.\n\n",
+                1e3 * v->surge_spread_pairs, 1e3 * v->sway_spread_pairs);
     fprintf(f, "Array yaw relative to the track: %.4e rad", v->yaw_estimate);
     if (v->has_truth)
         fprintf(f, " (error %+.2e rad); largest surge step (pings %d-%d) error %+.3f mm", v->yaw_error,
@@ -298,11 +320,13 @@ int cmd_validate(int argc, char **argv)
         {"k", required_argument, 0, 'k'},     {"i", required_argument, 0, 'i'},
         {"grid", required_argument, 0, 'g'},  {"threads", required_argument, 0, 't'},
         {"json", no_argument, 0, 'j'},        {"output", required_argument, 0, 'o'},
+        {"refine", no_argument, 0, 'R'},   {"sweeps", required_argument, 0, 's'},
         {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
     sasnav_validate_opts vo;
     sasnav_validate_default_opts(&vo);
     const char *output = NULL;
-    long kmin = vo.k_min, kmax = 0, k = vo.nav.pair.k, iters = vo.nav.pair.i, threads = 0;
+    long kmin = vo.k_min, kmax = 0, k = vo.nav.pair.k, iters = vo.nav.pair.i, threads = 0,
+         sweeps = vo.refine_opts.sweeps;
     int json = 0, opt;
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
@@ -324,6 +348,11 @@ int cmd_validate(int argc, char **argv)
         case 'g': if (cli_parse_grid(optarg, &vo.grid)) return cli_fail("validate", 0, "--grid needs X0,X1,NX,Y0,Y1,NY"); break;
         case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_fail("validate", 0, "--threads needs 0..1024"); break;
         case 'j': json = 1; break;
+        case 'R': vo.refine = 1; break;
+        case 's':
+            if (cli_parse_int(optarg, 1, SASNAV_REFINE_MAX_SWEEPS, &sweeps))
+                return cli_fail("validate", 0, "--sweeps needs 1..%d", SASNAV_REFINE_MAX_SWEEPS);
+            break;
         case 'o': output = optarg; break;
         case 'h': fputs(help, stdout); return 0;
         default: fputs(help, stderr); return 2;
@@ -341,6 +370,8 @@ int cmd_validate(int argc, char **argv)
     if (vo.nav.pair.coarse_k > vo.nav.pair.k) vo.nav.pair.coarse_k = vo.nav.pair.k;
     if (vo.nav.pair.coarse_i > vo.nav.pair.i) vo.nav.pair.coarse_i = vo.nav.pair.i;
     vo.nav.nthreads = (int)threads;
+    vo.refine_opts.sweeps = (int)sweeps;
+    vo.refine_opts.nthreads = (int)threads;
     vo.op.nthreads = (int)threads;
 
     int n_done = 0;
@@ -360,7 +391,7 @@ int cmd_validate(int argc, char **argv)
         sasnav_validation_free(&v);
         return cli_fail("validate", 0, "cannot create %s: %s", output, strerror(errno));
     }
-    json_t *root = summary(input, &v);
+    json_t *root = summary(input, &v, vo.refine);
     char *text = json_dumps(root, JSON_INDENT(2) | JSON_REAL_PRECISION(10));
     json_decref(root);
     char path[4096];
@@ -381,6 +412,9 @@ int cmd_validate(int argc, char **argv)
     else {
         printf("K trajectories: spread %.3f mm along track, %.3f mm across\n", 1e3 * v.surge_spread,
                1e3 * v.sway_spread);
+        if (vo.refine)
+            printf("pair trajectories alone: spread %.3f mm along track, %.3f mm across\n",
+                   1e3 * v.surge_spread_pairs, 1e3 * v.sway_spread_pairs);
         printf("array yaw relative to the track %.4e rad", v.yaw_estimate);
         if (v.has_truth)
             printf(" (error %+.2e); surge jump %d-%d error %+.3f mm", v.yaw_error, v.jump_p, v.jump_p + 1,

@@ -18,6 +18,7 @@ static const char *usage =
     "  ingest     real recordings (AirSAS, WAV) to a run: pulse compression, baseband\n"
     "  tank       simulate the paper's tank experiment as passband WAV recordings\n"
     "  navigate   estimate the trajectory of a whole run (subspace or DPCA)\n"
+    "  refine     refine a navigation with all pings together (data-domain fit)\n"
     "  demo       paper-trajectory end to end: navigation, images, report\n"
     "  validate   the tank experiment's validation (K sub-sampled runs, SISO/SIMO)\n"
     "\n"
@@ -35,6 +36,7 @@ static const command commands[] = {
     {"cuts", cmd_cuts},
     {"ingest", cmd_ingest},
     {"navigate", cmd_navigate},
+    {"refine", cmd_refine},
     {"demo", cmd_demo},
     {"tank", cmd_tank},
     {"validate", cmd_validate},

@@ -133,6 +133,14 @@ expect_fail "tank negative clutter" "" "$SASNAV" tank --clutter -1 -o "$T/tankre
 expect_fail "tank plate beyond the record" "" "$SASNAV" tank --plate-range 5 -o "$T/tankrec"
 expect_fail "ingest wav negative range" "" "$SASNAV" ingest --wav "$T/tankrec" --range -1 -o "$T/tank.h5"
 expect_fail "navigate first pose and anchor" "" "$SASNAV" navigate "$T/pair.h5" --first-pose 0,0,0 --anchor-truth -o "$T/nav.h5"
+expect_fail "refine no output" "" "$SASNAV" refine "$T/run.h5" "$T/run.h5"
+expect_fail "refine missing navigation" "$T/ref.h5" "$SASNAV" refine "$T/run.h5" "$T/missing.h5" -o "$T/ref.h5"
+expect_fail "refine ping counts differ" "$T/ref.h5" "$SASNAV" refine "$T/run.h5" "$T/pair.h5" -o "$T/ref.h5"
+expect_fail "refine two pings" "$T/ref.h5" "$SASNAV" refine "$T/pair.h5" "$T/pair.h5" -o "$T/ref.h5"
+expect_fail "refine zero sweeps" "$T/ref.h5" "$SASNAV" refine "$T/run.h5" "$T/run.h5" --sweeps 0 -o "$T/ref.h5"
+expect_fail "refine grid out of reach" "$T/ref.h5" "$SASNAV" refine "$T/run.h5" "$T/run.h5" --grid -0.1,0.1,5,40,40.1,5 -o "$T/ref.h5"
+expect_ok "refine point run" "$SASNAV" refine "$T/run.h5" "$T/run.h5" --grid -0.1,0.1,41,9.9,10.1,41 --sweeps 1 -o "$T/ref.h5"
+[ -s "$T/ref.h5" ] || { echo "FAIL refined navigation not written"; fails=$((fails + 1)); }
 
 ls "$T" | grep -q 'tmp-' && { echo "FAIL temporary files left: $(ls "$T")"; fails=$((fails + 1)); }
 echo "cli_errors: $fails failures"

@@ -248,8 +248,50 @@ static void test_errors(void)
     CHECK(fabs(dif[2].y - 1e-3) < 1e-14, "rotated differential %g", dif[2].y);
 }
 
+/* The rigid fit recovers a known motion exactly (points not collinear) and
+ * the least-squares one with noise against a direct search over the angle. */
+static void test_rigid_fit(void)
+{
+    enum { N = 9 };
+    sasnav_pose a[N], b[N];
+    sasnav_pose m = {0.3, -1.2, 0.4};
+    for (int i = 0; i < N; i++) {
+        a[i] = (sasnav_pose){0.1 * i, 0.02 * i * i, 0.0};
+        b[i] = sasnav_pose_compose(m, a[i]);
+    }
+    sasnav_pose f = sasnav_traj_rigid_fit(a, b, N);
+    CHECK(fabs(f.x - m.x) < 1e-12 && fabs(f.y - m.y) < 1e-12 && fabs(f.theta - m.theta) < 1e-12,
+          "rigid fit (%g, %g, %g)", f.x, f.y, f.theta);
+    for (int i = 0; i < N; i++) {
+        b[i].x += 1e-3 * sin(3.1 * i);
+        b[i].y += 1e-3 * cos(1.7 * i);
+    }
+    f = sasnav_traj_rigid_fit(a, b, N);
+    /* direct: for each angle the best translation is the centroid difference */
+    double best = HUGE_VAL, best_phi = 0;
+    for (int k = -2000; k <= 2000; k++) {
+        double phi = m.theta + 1e-6 * k, c = cos(phi), s = sin(phi), tx = 0, ty = 0, e = 0;
+        for (int i = 0; i < N; i++) {
+            tx += (b[i].x - (c * a[i].x - s * a[i].y)) / N;
+            ty += (b[i].y - (s * a[i].x + c * a[i].y)) / N;
+        }
+        for (int i = 0; i < N; i++) {
+            double ex = c * a[i].x - s * a[i].y + tx - b[i].x, ey = s * a[i].x + c * a[i].y + ty - b[i].y;
+            e += ex * ex + ey * ey;
+        }
+        if (e < best) {
+            best = e;
+            best_phi = phi;
+        }
+    }
+    CHECK(fabs(f.theta - best_phi) < 2e-6, "noisy rigid fit angle %.8f vs direct %.8f", f.theta, best_phi);
+    sasnav_pose z = sasnav_traj_rigid_fit(a, b, 0);
+    CHECK(z.x == 0 && z.y == 0 && z.theta == 0, "empty fit is not the identity");
+}
+
 int main(void)
 {
+    test_rigid_fit();
     test_round_trip();
     test_least_squares();
     test_alignment();

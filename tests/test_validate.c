@@ -16,7 +16,6 @@
  * - refusals: a step that is not a whole number of phase-centre spacings, a
  *   K range outside the run's, one receiver. */
 #include "sasnav/error.h"
-#include "sasnav/tank.h"
 #include "sasnav/validate.h"
 #include "testutil.h"
 
@@ -68,13 +67,7 @@ static double direct_ncc(const sasnav_cfloat *a, const sasnav_cfloat *b, const u
 
 int main(void)
 {
-    sasnav_tank_params p;
-    sasnav_tank_default(&p);
-    p.n_pings = N_PINGS;
-    p.jump_ping = 8;
-    p.x_start = -0.5 * (p.n_pings - 1) * p.step;
-    p.n_clutter = 50;
-    sasnav_run *run = test_tank_run(&p);
+    sasnav_run *run = test_tank_short_run(N_PINGS, 8);
     if (!run) return test_summary("test_validate");
     test_subset(run);
 
@@ -149,6 +142,37 @@ int main(void)
     } else {
         CHECK(0, "expected 2 trajectories, got %d", v.n_k);
     }
+    CHECK(v.surge_spread_pairs == v.surge_spread && v.sway_spread_pairs == v.sway_spread,
+          "pair spreads differ without refinement");
+#ifndef SASNAV_TEST_SANITIZED
+    /* With the refinement: the pair trajectories are the same ones (the
+     * same estimates), and every K's refined trajectory is closer to the
+     * truth than its pair trajectory (rms along track). */
+    if (v.n_k == 2) {
+        sasnav_validate_opts orf = o;
+        orf.refine = 1;
+        orf.refine_opts.sweeps = 2;
+        sasnav_validation w;
+        CHECK_OK(sasnav_validate(run, &orf, &w));
+        if (w.n_k == 2) {
+            CHECK(w.surge_spread_pairs == v.surge_spread && w.sway_spread_pairs == v.sway_spread,
+                  "pair spreads %.4g / %.4g vs %.4g / %.4g without refinement", w.surge_spread_pairs,
+                  w.sway_spread_pairs, v.surge_spread, v.sway_spread);
+            for (int k = 0; k < 2; k++) {
+                CHECK(w.k[k].refine_sweeps >= w.k[k].n_phases, "K = %d: %d refinement sweeps", w.k[k].k,
+                      w.k[k].refine_sweeps);
+                CHECK(w.k[k].rms_error.x < w.k[k].rms_error_pairs.x, "K = %d: refined surge rms %.3g m, pairs %.3g m",
+                      w.k[k].k, w.k[k].rms_error.x, w.k[k].rms_error_pairs.x);
+                printf("K = %d: rms surge / sway vs truth %.3f / %.3f mm, pairs alone %.3f / %.3f mm\n", w.k[k].k,
+                       1e3 * w.k[k].rms_error.x, 1e3 * w.k[k].rms_error.y, 1e3 * w.k[k].rms_error_pairs.x,
+                       1e3 * w.k[k].rms_error_pairs.y);
+            }
+            printf("refined spreads %.2f / %.2f mm (pairs alone %.2f / %.2f mm)\n", 1e3 * w.surge_spread,
+                   1e3 * w.sway_spread, 1e3 * w.surge_spread_pairs, 1e3 * w.sway_spread_pairs);
+        }
+        sasnav_validation_free(&w);
+    }
+#endif
     sasnav_validation_free(&v);
 
     /* refusals */

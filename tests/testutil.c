@@ -69,3 +69,14 @@ sasnav_run *test_tank_run(const sasnav_tank_params *p)
     CHECK_OK(sasnav_tank_read_dir(dir, &ro, &run));
     return run;
 }
+
+sasnav_run *test_tank_short_run(int n_pings, int jump_ping)
+{
+    sasnav_tank_params p;
+    sasnav_tank_default(&p);
+    p.n_pings = n_pings;
+    p.jump_ping = jump_ping;
+    p.x_start = -0.5 * (p.n_pings - 1) * p.step;
+    p.n_clutter = 50;
+    return test_tank_run(&p);
+}

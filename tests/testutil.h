@@ -40,6 +40,11 @@ const char *test_tmpdir(void);
  * (CHECKs each step; NULL on failure). Free with sasnav_run_free. */
 sasnav_run *test_tank_run(const sasnav_tank_params *p);
 
+/* A short tank run through test_tank_run: the default tank with n_pings
+ * centred on the plate, the surge jump before ping jump_ping and 50 clutter
+ * points (a lighter scene for quick tests). */
+sasnav_run *test_tank_short_run(int n_pings, int jump_ping);
+
 /* Final-stage estimator iterations for the tests that run whole searches:
  * coarse ones keep the sanitized build inside its time budget. */
 #ifdef SASNAV_TEST_SANITIZED

@@ -47,6 +47,12 @@ int sasnav_traj_ping_poses(const sasnav_pose *centroids, int n, double tx_lag, d
 /* Centroid poses of ping poses (sasnav_ping_centroid of each). */
 int sasnav_traj_centroids(const sasnav_ping_pose *pings, int n, sasnav_pose *centroids);
 
+/* The rigid motion M (rotation + translation, returned as a pose) that
+ * minimises sum_i |M a_i - b_i|^2 over the positions of the n poses (2-D
+ * Procrustes, closed form; the identity's rotation when n < 2 or the
+ * points coincide). */
+sasnav_pose sasnav_traj_rigid_fit(const sasnav_pose *a, const sasnav_pose *b, int n);
+
 /* One relative measurement: the displacement of ping q's centroid in ping
  * p's centroid frame, with the standard deviations of its surge, sway and
  * yaw (all > 0; the residuals are divided by them). */

@@ -37,6 +37,7 @@
 
 #include "sasnav/image.h"
 #include "sasnav/navigate.h"
+#include "sasnav/refine.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -57,6 +58,12 @@ typedef struct {
     double region_db;          /* compared region, dB below the peak of the
                                   mean magnitude (default 12) */
     sasnav_op_opts op;         /* backprojection options */
+    int refine;                /* 1: refine every phase's trajectory on the
+                                  phase's own pings with the multi-ping
+                                  data-domain fit (refine.h) before placing
+                                  it; 0 (default): the paper's pair
+                                  trajectories only */
+    sasnav_refine_opts refine_opts; /* its options (grid: the image grid) */
 } sasnav_validate_opts;
 
 void sasnav_validate_default_opts(sasnav_validate_opts *opts);
@@ -69,10 +76,15 @@ typedef struct {
     int n_pairs;               /* pairs estimated over all phases */
     sasnav_navigate_pair *pairs; /* their results (p, q in the run's indices) */
     int n_failed;              /* pairs whose estimate failed (nominal used) */
-    sasnav_pose *centroids;    /* n_pings combined, aligned centroids */
+    sasnav_pose *centroids;    /* n_pings combined, aligned centroids (refined
+                                  when opts.refine) */
+    sasnav_pose *centroids_pairs; /* the same from the pair estimates alone */
     double track_angle;        /* rad, removed by the alignment */
     sasnav_pose rms_error;     /* vs the truth (aligned the same way, first
                                   centroids made to coincide); 0 without */
+    sasnav_pose rms_error_pairs; /* the same for centroids_pairs */
+    int refine_sweeps;         /* refinement sweeps over all phases */
+    double refine_seconds;     /* wall time of the refinements */
     double seconds;
 } sasnav_validate_k;
 
@@ -82,6 +94,8 @@ typedef struct {
     double surge_spread;       /* m, max over pings of (max - min over K) of
                                   the along-track position */
     double sway_spread;        /* m, the same across track */
+    double surge_spread_pairs, sway_spread_pairs; /* the same for the pair
+                                  trajectories (equal without opts.refine) */
     int has_truth;
     int jump_p;                /* the largest true surge step is (jump_p,
                                   jump_p + 1) */

@@ -333,3 +333,28 @@ int sasnav_traj_errors(const sasnav_pose *estimated, const sasnav_pose *truth, i
     }
     return SASNAV_OK;
 }
+
+sasnav_pose sasnav_traj_rigid_fit(const sasnav_pose *a, const sasnav_pose *b, int n)
+{
+    if (n < 1 || !a || !b) return (sasnav_pose){0, 0, 0};
+    double ax = 0, ay = 0, bx = 0, by = 0;
+    for (int i = 0; i < n; i++) {
+        ax += a[i].x;
+        ay += a[i].y;
+        bx += b[i].x;
+        by += b[i].y;
+    }
+    ax /= n;
+    ay /= n;
+    bx /= n;
+    by /= n;
+    double sdot = 0, scross = 0;
+    for (int i = 0; i < n; i++) {
+        double px = a[i].x - ax, py = a[i].y - ay, qx = b[i].x - bx, qy = b[i].y - by;
+        sdot += px * qx + py * qy;
+        scross += px * qy - py * qx;
+    }
+    double phi = (sdot == 0 && scross == 0) ? 0.0 : atan2(scross, sdot);
+    double c = cos(phi), s = sin(phi);
+    return (sasnav_pose){bx - (c * ax - s * ay), by - (s * ax + c * ay), phi};
+}

@@ -3,6 +3,7 @@
 #include "sasnav/validate.h"
 
 #include "sasnav/error.h"
+#include "sasnav/refine.h"
 #include "sasnav/trajectory.h"
 #include "core/clock.h"
 
@@ -20,6 +21,8 @@ void sasnav_validate_default_opts(sasnav_validate_opts *o)
     sasnav_navigate_default_opts(&o->nav);
     o->region_db = 12.0;
     sasnav_op_default_opts(&o->op);
+    o->refine = 0;
+    sasnav_refine_default_opts(&o->refine_opts);
 }
 
 void sasnav_validation_free(sasnav_validation *v)
@@ -28,6 +31,7 @@ void sasnav_validation_free(sasnav_validation *v)
     for (int i = 0; i < v->n_k; i++) {
         free(v->k[i].pairs);
         free(v->k[i].centroids);
+        free(v->k[i].centroids_pairs);
     }
     free(v->images);
     free(v->image_k);
@@ -37,36 +41,11 @@ void sasnav_validation_free(sasnav_validation *v)
     memset(v, 0, sizeof *v);
 }
 
-/* Rigid motion (rotation + translation) minimising sum |M a_i - b_i|^2 over
- * the positions of the poses (2-D Procrustes, closed form). */
-static sasnav_pose rigid_fit(const sasnav_pose *a, const sasnav_pose *b, int n)
-{
-    double ax = 0, ay = 0, bx = 0, by = 0;
-    for (int i = 0; i < n; i++) {
-        ax += a[i].x;
-        ay += a[i].y;
-        bx += b[i].x;
-        by += b[i].y;
-    }
-    ax /= n;
-    ay /= n;
-    bx /= n;
-    by /= n;
-    double sdot = 0, scross = 0;
-    for (int i = 0; i < n; i++) {
-        double px = a[i].x - ax, py = a[i].y - ay, qx = b[i].x - bx, qy = b[i].y - by;
-        sdot += px * qx + py * qy;
-        scross += px * qy - py * qx;
-    }
-    double phi = (sdot == 0 && scross == 0) ? 0.0 : atan2(scross, sdot);
-    double c = cos(phi), s = sin(phi);
-    return (sasnav_pose){bx - (c * ax - s * ay), by - (s * ax + c * ay), phi};
-}
-
 /* Navigates one phase (pings first, first + stride, ...) and writes the
  * pair results and the phase's centroids into the K's arrays. */
 static int navigate_phase(const sasnav_run *run, const sasnav_validate_opts *o, int first, int stride,
-                          const sasnav_pose *reference, sasnav_validate_k *vk)
+                          const sasnav_pose *reference, const sasnav_pose *reference_pairs,
+                          sasnav_validate_k *vk)
 {
     int m = 0;
     for (int p = first; p < run->n_pings; p += stride) m++;
@@ -97,9 +76,31 @@ static int navigate_phase(const sasnav_run *run, const sasnav_validate_opts *o, 
         /* Place the phase: the reference phase keeps its start (the nominal
          * first ping); others are fitted onto the reference. */
         sasnav_pose move = {0, 0, 0};
+        if (reference_pairs) {
+            for (int j = 0; j < m; j++) target[j] = reference_pairs[idx[j]];
+            move = sasnav_traj_rigid_fit(nav.centroids, target, m);
+        }
+        for (int j = 0; j < m; j++) vk->centroids_pairs[idx[j]] = sasnav_pose_compose(move, nav.centroids[j]);
+    }
+    if (!rc && o->refine) {
+        /* Multi-ping refinement of the phase on its own pings, then placed
+         * the same way onto the refined reference. */
+        sasnav_refine_opts ro = o->refine_opts;
+        ro.grid = o->grid;
+        if (ro.nthreads == 0) ro.nthreads = o->nav.nthreads;
+        sasnav_refine_report rep;
+        rc = sasnav_refine(sub, nav.nav, &ro, nav.nav, &rep);
+        if (!rc) rc = sasnav_traj_centroids(nav.nav, m, nav.centroids);
+        if (!rc) {
+            vk->refine_seconds += rep.seconds;
+            vk->refine_sweeps += rep.sweeps;
+        }
+    }
+    if (!rc) {
+        sasnav_pose move = {0, 0, 0};
         if (reference) {
             for (int j = 0; j < m; j++) target[j] = reference[idx[j]];
-            move = rigid_fit(nav.centroids, target, m);
+            move = sasnav_traj_rigid_fit(nav.centroids, target, m);
         }
         for (int j = 0; j < m; j++) vk->centroids[idx[j]] = sasnav_pose_compose(move, nav.centroids[j]);
     }
@@ -174,6 +175,45 @@ static int aligned_truth(const sasnav_run *run, const sasnav_pose *est, sasnav_p
     return SASNAV_OK;
 }
 
+/* Rms error of aligned centroids against the truth aligned the same way
+ * (first centroids made to coincide). */
+static int rms_vs_truth(const sasnav_run *run, const sasnav_pose *est, sasnav_pose *rms)
+{
+    int n = run->n_pings;
+    sasnav_pose *tc = malloc(sizeof(sasnav_pose) * n);
+    if (!tc) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    int rc = aligned_truth(run, est, tc);
+    double sx = 0, sy = 0, st = 0;
+    for (int i = 0; i < n && !rc; i++) {
+        double ex = est[i].x - tc[i].x, ey = est[i].y - tc[i].y;
+        double et = sasnav_wrap_angle(est[i].theta - tc[i].theta);
+        sx += ex * ex;
+        sy += ey * ey;
+        st += et * et;
+    }
+    if (!rc) *rms = (sasnav_pose){sqrt(sx / n), sqrt(sy / n), sqrt(st / n)};
+    free(tc);
+    return rc;
+}
+
+/* Largest (max - min over K) of the along- and cross-track positions. */
+static void spreads(const sasnav_validation *v, int pairs_only, double *surge, double *sway)
+{
+    *surge = *sway = 0;
+    for (int i = 0; i < v->n_pings; i++) {
+        double xl = HUGE_VAL, xh = -HUGE_VAL, yl = HUGE_VAL, yh = -HUGE_VAL;
+        for (int k = 0; k < v->n_k; k++) {
+            sasnav_pose c = pairs_only ? v->k[k].centroids_pairs[i] : v->k[k].centroids[i];
+            xl = fmin(xl, c.x);
+            xh = fmax(xh, c.x);
+            yl = fmin(yl, c.y);
+            yh = fmax(yh, c.y);
+        }
+        *surge = fmax(*surge, xh - xl);
+        *sway = fmax(*sway, yh - yl);
+    }
+}
+
 int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sasnav_validation *out)
 {
     if (!out) return sasnav_set_error(SASNAV_ERR_ARG, "validation output is NULL");
@@ -224,6 +264,7 @@ int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sas
         return rc;
     }
     out->grid = grid;
+    o.grid = grid;
     out->n_pings = n;
     out->has_truth = run->truth != NULL;
     out->n_siso = nrx;
@@ -243,31 +284,25 @@ int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sas
         vk->stride = vk->n_phases = stride;
         vk->pairs = calloc((size_t)2 * n, sizeof *vk->pairs); /* consecutive + long */
         vk->centroids = calloc((size_t)n, sizeof *vk->centroids);
+        vk->centroids_pairs = calloc((size_t)n, sizeof *vk->centroids_pairs);
         out->n_k++;
-        if (!vk->pairs || !vk->centroids) {
+        if (!vk->pairs || !vk->centroids || !vk->centroids_pairs) {
             rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
             break;
         }
         /* Phases go onto the reference (the largest K's trajectory); the
          * reference's own later phases onto the nominal track. */
         const sasnav_pose *ref = out->n_k > 1 ? out->k[0].centroids : nominal_c;
+        const sasnav_pose *ref_pairs = out->n_k > 1 ? out->k[0].centroids_pairs : nominal_c;
+        int placed = out->n_k > 1;
         for (int ph = 0; ph < stride && !rc; ph++)
-            rc = navigate_phase(run, &o, ph, stride, out->n_k > 1 || ph > 0 ? ref : NULL, vk);
+            rc = navigate_phase(run, &o, ph, stride, placed || ph > 0 ? ref : NULL,
+                                placed || ph > 0 ? ref_pairs : NULL, vk);
         if (!rc) rc = sasnav_traj_align(vk->centroids, n, &vk->track_angle);
+        if (!rc) rc = sasnav_traj_align(vk->centroids_pairs, n, NULL);
         if (!rc && run->truth) {
-            sasnav_pose *tc = malloc(sizeof(sasnav_pose) * n);
-            if (!tc) rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-            if (!rc) rc = aligned_truth(run, vk->centroids, tc);
-            double sx = 0, sy = 0, st = 0;
-            for (int i = 0; i < n && !rc; i++) {
-                double ex = vk->centroids[i].x - tc[i].x, ey = vk->centroids[i].y - tc[i].y;
-                double et = sasnav_wrap_angle(vk->centroids[i].theta - tc[i].theta);
-                sx += ex * ex;
-                sy += ey * ey;
-                st += et * et;
-            }
-            vk->rms_error = (sasnav_pose){sqrt(sx / n), sqrt(sy / n), sqrt(st / n)};
-            free(tc);
+            rc = rms_vs_truth(run, vk->centroids, &vk->rms_error);
+            if (!rc) rc = rms_vs_truth(run, vk->centroids_pairs, &vk->rms_error_pairs);
         }
         vk->seconds = sasnav_now_seconds() - tk;
     }
@@ -277,18 +312,8 @@ int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sas
 
     /* 4: spreads. */
     if (!rc) {
-        for (int i = 0; i < n; i++) {
-            double xl = HUGE_VAL, xh = -HUGE_VAL, yl = HUGE_VAL, yh = -HUGE_VAL;
-            for (int k = 0; k < out->n_k; k++) {
-                sasnav_pose c = out->k[k].centroids[i];
-                xl = fmin(xl, c.x);
-                xh = fmax(xh, c.x);
-                yl = fmin(yl, c.y);
-                yh = fmax(yh, c.y);
-            }
-            out->surge_spread = fmax(out->surge_spread, xh - xl);
-            out->sway_spread = fmax(out->sway_spread, yh - yl);
-        }
+        spreads(out, 0, &out->surge_spread, &out->sway_spread);
+        spreads(out, 1, &out->surge_spread_pairs, &out->sway_spread_pairs);
         const sasnav_validate_k *k0 = &out->k[0];
         double sy = 0;
         for (int i = 0; i < n; i++) sy += k0->centroids[i].theta;

@@ -1,0 +1,144 @@
+/* sasnav refine: multi-ping data-domain refinement of a navigation. */
+#include "cli.h"
+
+#include "sasnav/io.h"
+#include "sasnav/refine.h"
+#include "sasnav/run.h"
+#include "sasnav/trajectory.h"
+
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+static const char *help =
+    "usage: sasnav refine run.h5 nav.h5 -o refined.h5 [--grid X0,X1,NX,Y0,Y1,NY]\n"
+    "                     [--sweeps N] [--surge-range M] [--sway-range M] [--threads N]\n"
+    "\n"
+    "Refines a navigation (the output of 'sasnav navigate', or any navigation\n"
+    "file of the run's pings) with all pings together: for each ping in turn,\n"
+    "a least-squares scene is fitted to the other pings' data, and the ping is\n"
+    "moved along and across its array axis to best predict its own data from\n"
+    "that scene (docs/navigation.md, 'Multi-ping refinement'). The common move\n"
+    "of all pings is removed (not observable). The start must be within the\n"
+    "search ranges of the truth (sway within about a quarter wavelength).\n"
+    "Where the run holds the truth, prints the rms surge and sway errors\n"
+    "before and after (after the rigid motion that best fits the centroids\n"
+    "onto the true ones).\n"
+    "\n"
+    "  --grid ...        scene grid (default: the nominal track's extent x range\n"
+    "                    of interest +-0.35 m, 5 mm pixels); it must hold the\n"
+    "                    scene's echoes and sample their band\n"
+    "  --sweeps N        sweeps over the pings at most (default 4)\n"
+    "  --surge-range M   half-width of the surge search, m (default 0.012)\n"
+    "  --sway-range M    half-width of the sway search, m (default 0.0015)\n"
+    "  --threads N       OpenMP threads (default: all cores)\n"
+    "  -o FILE           output navigation (HDF5, with the run's truth if any)\n";
+
+/* Rms along- and across-track error of the centroids after the rigid motion
+ * that best fits them onto the true ones (a common move and turn of the
+ * whole trajectory is not observable), m. Returns nonzero on no memory. */
+static int rms_rigid(const sasnav_run *run, const sasnav_ping_pose *nav, double *su, double *sw)
+{
+    int n = run->n_pings;
+    sasnav_pose *a = malloc(sizeof *a * n), *t = malloc(sizeof *t * n);
+    int rc = a && t ? SASNAV_OK : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    if (!rc) rc = sasnav_traj_centroids(nav, n, a);
+    if (!rc) rc = sasnav_traj_centroids(run->truth, n, t);
+    if (!rc) {
+        sasnav_pose m = sasnav_traj_rigid_fit(a, t, n);
+        double ex = 0, ey = 0;
+        for (int p = 0; p < n; p++) {
+            sasnav_pose e = sasnav_pose_compose(m, a[p]);
+            ex += (e.x - t[p].x) * (e.x - t[p].x);
+            ey += (e.y - t[p].y) * (e.y - t[p].y);
+        }
+        *su = sqrt(ex / n);
+        *sw = sqrt(ey / n);
+    }
+    free(a);
+    free(t);
+    return rc;
+}
+
+int cmd_refine(int argc, char **argv)
+{
+    static const struct option longopts[] = {
+        {"grid", required_argument, 0, 'g'},        {"sweeps", required_argument, 0, 's'},
+        {"surge-range", required_argument, 0, 'u'}, {"sway-range", required_argument, 0, 'v'},
+        {"threads", required_argument, 0, 't'},     {"output", required_argument, 0, 'o'},
+        {"help", no_argument, 0, 'h'},              {0, 0, 0, 0}};
+    sasnav_refine_opts ro;
+    sasnav_refine_default_opts(&ro);
+    const char *output = NULL;
+    long sweeps = ro.sweeps, threads = 0;
+    int opt;
+    optind = 1;
+    while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
+        switch (opt) {
+        case 'g': if (cli_parse_grid(optarg, &ro.grid)) return cli_fail("refine", 0, "--grid needs X0,X1,NX,Y0,Y1,NY"); break;
+        case 's':
+            if (cli_parse_int(optarg, 1, SASNAV_REFINE_MAX_SWEEPS, &sweeps))
+                return cli_fail("refine", 0, "--sweeps needs 1..%d", SASNAV_REFINE_MAX_SWEEPS);
+            break;
+        case 'u':
+            if (cli_parse_double(optarg, &ro.surge_range) || !(ro.surge_range > 0 && ro.surge_range <= 1))
+                return cli_fail("refine", 0, "--surge-range needs a half-width in (0, 1] m");
+            break;
+        case 'v':
+            if (cli_parse_double(optarg, &ro.sway_range) || !(ro.sway_range > 0 && ro.sway_range <= 1))
+                return cli_fail("refine", 0, "--sway-range needs a half-width in (0, 1] m");
+            break;
+        case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_fail("refine", 0, "--threads needs 0..1024"); break;
+        case 'o': output = optarg; break;
+        case 'h': fputs(help, stdout); return 0;
+        default: fputs(help, stderr); return 2;
+        }
+    }
+    if (optind != argc - 2) return cli_fail("refine", 0, "a run file and a navigation file are required");
+    if (!output) return cli_fail("refine", 0, "an output file is required (-o FILE)");
+    ro.sweeps = (int)sweeps;
+    ro.nthreads = (int)threads;
+    const char *run_path = argv[optind], *nav_path = argv[optind + 1];
+    sasnav_run *run = NULL;
+    int rc = sasnav_run_read(run_path, &run);
+    if (rc) return cli_fail("refine", rc, "cannot read %s", run_path);
+    int n = 0;
+    sasnav_ping_pose *nav = NULL;
+    rc = sasnav_nav_read(nav_path, &n, &nav, NULL);
+    if (rc) {
+        sasnav_run_free(run);
+        return cli_fail("refine", rc, "cannot read %s", nav_path);
+    }
+    if (n != run->n_pings) {
+        sasnav_run_free(run);
+        free(nav);
+        return cli_fail("refine", 0, "%s has %d pings, %s has %d", nav_path, n, run_path, run->n_pings);
+    }
+    sasnav_ping_pose *out = malloc(sizeof *out * n);
+    sasnav_refine_report rep;
+    rc = out ? sasnav_refine(run, nav, &ro, out, &rep) : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    if (!rc) rc = sasnav_nav_write(output, n, out, run->truth);
+    if (rc) {
+        sasnav_run_free(run);
+        free(nav);
+        free(out);
+        return cli_fail("refine", rc, "refinement of %s failed", nav_path);
+    }
+    for (int s = 0; s < rep.sweeps; s++)
+        printf("sweep %d: mean misfit %.5f -> %.5f, rms move %.3f mm\n", s + 1, rep.misfit[s], rep.misfit[s + 1],
+               1e3 * rep.rms_move[s]);
+    printf("common move removed: %+.3f mm along, %+.3f mm across\n", 1e3 * rep.mean_move_surge,
+           1e3 * rep.mean_move_sway);
+    if (run->truth) {
+        double a0, b0, a1, b1;
+        if (!rms_rigid(run, nav, &a0, &b0) && !rms_rigid(run, out, &a1, &b1))
+            printf("rms error vs the truth (best rigid fit): surge %.3f -> %.3f mm, sway %.3f -> %.3f mm\n",
+                   1e3 * a0, 1e3 * a1, 1e3 * b0, 1e3 * b1);
+    }
+    fprintf(stderr, "sasnav refine: %d pings, %d sweeps, %.1f s -> %s\n", n, rep.sweeps, rep.seconds, output);
+    sasnav_run_free(run);
+    free(nav);
+    free(out);
+    return 0;
+}

@@ -1,0 +1,115 @@
+/* sasnav -- multi-ping refinement of a trajectory in the data domain.
+ *
+ * The pair estimator compares single-ping images, and one ping's phase
+ * centres sample the array every d (2.5 cm in the tank), far coarser than
+ * lambda / 4: each single-ping image of a compact target carries a grating
+ * lobe that agrees between two pings only where their phase centres
+ * coincide, which pulls the surge of nearly-coincident pairs towards the
+ * nominal step (docs/estimator.md, "Known weakness"). Many pings together
+ * fill the aperture and their common scene has no such ghost. The
+ * refinement uses that scene:
+ *
+ *   for each sweep, for each ping q in turn (Gauss-Seidel):
+ *     1. s = argmin sum_{p != q} ||T_p s - phi_p||^2 + mu ||s||^2, the
+ *        regularised least-squares reflectivity on a scene grid explaining
+ *        every other ping at its current pose (conjugate gradients on the
+ *        normal equations, warm-started from the previous ping's scene;
+ *        mu = damping x the Rayleigh quotient of the first direction);
+ *     2. ping q's pose is moved rigidly along its own array axis (surge)
+ *        and across it (sway) to minimise the normalised misfit
+ *          c(u, v) = 1 - |<phi_q, T_q(u, v) s>|^2 / (||phi_q||^2 ||T_q s||^2)
+ *        (the best complex scale of the prediction is free): in the first
+ *        sweep a grid search over +-surge_range x +-sway_range (steps of
+ *        surge_range / 12 and sway_range / 6) and a local polish (NLopt
+ *        BOBYQA), in later sweeps BOBYQA alone within four times the
+ *        previous sweep's rms move (at least 1 mm, 0.5 mm), never further
+ *        than the ranges from the input pose;
+ *   a sweep whose mean misfit (over the pings, at their chosen poses) is
+ *   more than 10% above the previous sweep's is undone and ends the
+ *   refinement (on short runs the sweeps can drift apart instead of
+ *   converging, docs/navigation.md); then every pose is moved back by the
+ *   mean of the moves (a common
+ *   translation of all pings and the scene is not observable: the
+ *   refinement keeps the input's mean position). Sweeps stop early when
+ *   the rms move of a sweep falls below stop_move.
+ * Yaw is left as it is (held: a yaw error is nearly a surge error on a
+ * compact scene).
+ *
+ * The input must already be within the search ranges of the truth (a pair
+ * navigation, sasnav_navigate): sway within about lambda / 4 (the misfit
+ * has fringes of lambda / 2 across the line of sight).
+ *
+ * Cost: sweeps x pings x (cg_iterations x 2 (n_pings - 1) operator
+ * applications + about 400 single-ping predictions). Memory: one operator
+ * per ping on the scene grid (about 28 bytes per pixel and channel at the
+ * default tolerance 1e-3), e.g. 160 MB for 32 pings of 8 channels on
+ * 22,000 pixels.
+ *
+ * Thread safety: re-entrant for distinct outputs; OpenMP inside. The
+ * library never prints. */
+#ifndef SASNAV_REFINE_H
+#define SASNAV_REFINE_H
+#include "sasnav/image.h"
+#include "sasnav/op.h"
+#include "sasnav/run.h"
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SASNAV_REFINE_MAX_SWEEPS 32
+
+typedef struct {
+    sasnav_grid grid;     /* scene grid, world frame; nx = 0 (default): the
+                             nominal track's along-track extent x the range
+                             of interest +-0.35 m, 5 mm pixels (pixels must
+                             sample the scene's band: see docs/navigation.md) */
+    int sweeps;           /* maximum sweeps over the pings (default 4, <= 32) */
+    int cg_first;         /* CG iterations of the first scene (default 40) */
+    int cg_iterations;    /* CG iterations of each later, warm-started scene
+                             (default 12) */
+    double damping;       /* mu relative to the normal operator's scale
+                             (default 1e-3) */
+    double surge_range;   /* m, half-width of the surge search (default 0.012);
+                             both ranges also bound each ping's total move
+                             from its input pose */
+    double sway_range;    /* m, half-width of the sway search (default 0.0015:
+                             inside lambda / 4 of the tank's 105 kHz, so that
+                             the search cannot hop a fringe) */
+    double stop_move;     /* m, stop when a sweep's rms move is below this
+                             (default 5e-5) */
+    sasnav_op_opts op;    /* operator options (default tolerance 1e-3) */
+    int nthreads;         /* OpenMP threads (0 = OpenMP default) */
+} sasnav_refine_opts;
+
+void sasnav_refine_default_opts(sasnav_refine_opts *opts);
+
+typedef struct {
+    int sweeps;                                 /* sweeps made */
+    double misfit[SASNAV_REFINE_MAX_SWEEPS + 1]; /* mean misfit c over the pings
+                                                   before sweep i (i = 0: the
+                                                   input), at the sweep's
+                                                   chosen pose */
+    double rms_move[SASNAV_REFINE_MAX_SWEEPS];  /* m, rms (surge, sway) move of
+                                                   sweep i */
+    int undone;                                 /* 1: the last sweep tried
+                                                   raised the mean misfit by
+                                                   more than 10% and was
+                                                   undone (not counted) */
+    double mean_move_surge, mean_move_sway;     /* m, the common move removed */
+    double seconds;
+} sasnav_refine_report;
+
+/* Refines the ping poses `nav_in` (n = run->n_pings >= 3, world frame) of
+ * `run` into `nav_out` (may equal nav_in). `opts` and `report` may be
+ * NULL. Errors: SASNAV_ERR_ARG (bad run, options or grid, fewer than 3
+ * pings), SASNAV_ERR_NOMEM, SASNAV_ERR_FFT, SASNAV_ERR_GEOMETRY (a sensor
+ * on a pixel), SASNAV_ERR_ARG also for a ping with no signal,
+ * SASNAV_ERR_NO_OVERLAP (a scene grid that no ping reaches). nav_out is written only on success. */
+int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in,
+                  const sasnav_refine_opts *opts, sasnav_ping_pose *nav_out,
+                  sasnav_refine_report *report);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
