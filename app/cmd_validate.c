@@ -94,6 +94,12 @@ static json_t *summary(const char *input, const sasnav_validation *v, int refine
     json_object_set_new(root, "yaw_error", num(v->yaw_error));
     json_object_set_new(root, "sway_spread", num(v->sway_spread));
     json_object_set_new(root, "surge_spread", num(v->surge_spread));
+    json_object_set_new(root, "surge_spread_ping", json_integer(v->surge_spread_ping));
+    json_t *sk = json_array();
+    json_array_append_new(sk, json_integer(v->surge_spread_k[0]));
+    json_array_append_new(sk, json_integer(v->surge_spread_k[1]));
+    json_object_set_new(root, "surge_spread_k", sk);
+    json_object_set_new(root, "sway_spread_ping", json_integer(v->sway_spread_ping));
     json_object_set_new(root, "refined", json_boolean(refined));
     json_object_set_new(root, "sway_spread_pairs", num(v->sway_spread_pairs));
     json_object_set_new(root, "surge_spread_pairs", num(v->surge_spread_pairs));
@@ -288,9 +294,11 @@ static int write_report(const char *dir, const char *input, const sasnav_validat
                     1e3 * vk->rms_error_pairs.x, 1e3 * vk->rms_error_pairs.y);
         fprintf(f, " %.1f |\n", vk->seconds);
     }
-    fprintf(f, "\nAgreement of the K trajectories: largest spread %.3f mm along track, %.3f mm across "
-               "(paper: < 5 mm and < 0.5 mm).\n\n",
-            1e3 * v->surge_spread, 1e3 * v->sway_spread);
+    fprintf(f,
+            "\nAgreement of the K trajectories: largest spread %.3f mm along track (ping %d, between K = %d "
+            "and K = %d), %.3f mm across (ping %d) (paper: < 5 mm and < 0.5 mm).\n\n",
+            1e3 * v->surge_spread, v->surge_spread_ping, v->surge_spread_k[0], v->surge_spread_k[1],
+            1e3 * v->sway_spread, v->sway_spread_ping);
     if (vo->refine)
         fprintf(f, "The pair trajectories alone (before refinement): %.3f mm along track, %.3f mm across.\n\n",
                 1e3 * v->surge_spread_pairs, 1e3 * v->sway_spread_pairs);
@@ -410,8 +418,9 @@ int cmd_validate(int argc, char **argv)
     }
     if (json) puts(text);
     else {
-        printf("K trajectories: spread %.3f mm along track, %.3f mm across\n", 1e3 * v.surge_spread,
-               1e3 * v.sway_spread);
+        printf("K trajectories: spread %.3f mm along track (ping %d, K = %d vs %d), %.3f mm across (ping %d)\n",
+               1e3 * v.surge_spread, v.surge_spread_ping, v.surge_spread_k[0], v.surge_spread_k[1],
+               1e3 * v.sway_spread, v.sway_spread_ping);
         if (vo.refine)
             printf("pair trajectories alone: spread %.3f mm along track, %.3f mm across\n",
                    1e3 * v.surge_spread_pairs, 1e3 * v.sway_spread_pairs);

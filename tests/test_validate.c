@@ -99,6 +99,35 @@ int main(void)
               v.surge_spread, v.sway_spread);
         CHECK(fabs(v.yaw_error) < 2e-3, "array yaw error %.3g rad (bound 2e-3)", v.yaw_error);
         CHECK(isfinite(v.surge_spread) && isfinite(v.sway_spread) && v.surge_spread >= 0, "spreads");
+        {
+            /* Where the spreads are reached, against a direct search over
+             * every ping and every pair of K. */
+            double best = -1, best_y = -1;
+            int ping = -1, ping_y = -1, klo = 0, khi = 0;
+            for (int i = 0; i < v.n_pings; i++)
+                for (int a = 0; a < v.n_k; a++)
+                    for (int b = 0; b < v.n_k; b++) {
+                        double dx = v.k[b].centroids[i].x - v.k[a].centroids[i].x;
+                        double dy = v.k[b].centroids[i].y - v.k[a].centroids[i].y;
+                        if (dx > best) {
+                            best = dx;
+                            ping = i;
+                            klo = v.k[a].k;
+                            khi = v.k[b].k;
+                        }
+                        if (dy > best_y) {
+                            best_y = dy;
+                            ping_y = i;
+                        }
+                    }
+            CHECK(best == v.surge_spread && ping == v.surge_spread_ping && klo == v.surge_spread_k[0] &&
+                      khi == v.surge_spread_k[1],
+                  "surge spread %.4g m at ping %d (K %d-%d), direct %.4g m at ping %d (K %d-%d)", v.surge_spread,
+                  v.surge_spread_ping, v.surge_spread_k[0], v.surge_spread_k[1], best, ping, klo, khi);
+            CHECK(best_y == v.sway_spread && ping_y == v.sway_spread_ping,
+                  "sway spread %.4g m at ping %d, direct %.4g m at ping %d", v.sway_spread, v.sway_spread_ping,
+                  best_y, ping_y);
+        }
         /* correlation matrix against a direct evaluation */
         size_t npx = (size_t)v.grid.nx * v.grid.ny;
         double *mean = calloc(npx, sizeof(double)), peak = 0;

@@ -96,6 +96,10 @@ typedef struct {
     double sway_spread;        /* m, the same across track */
     double surge_spread_pairs, sway_spread_pairs; /* the same for the pair
                                   trajectories (equal without opts.refine) */
+    int surge_spread_ping;     /* the ping where surge_spread is reached */
+    int surge_spread_k[2];     /* the K whose positions there are lowest and
+                                  highest along track */
+    int sway_spread_ping;      /* the ping where sway_spread is reached */
     int has_truth;
     int jump_p;                /* the largest true surge step is (jump_p,
                                   jump_p + 1) */

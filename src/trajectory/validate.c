@@ -196,21 +196,44 @@ static int rms_vs_truth(const sasnav_run *run, const sasnav_pose *est, sasnav_po
     return rc;
 }
 
-/* Largest (max - min over K) of the along- and cross-track positions. */
-static void spreads(const sasnav_validation *v, int pairs_only, double *surge, double *sway)
+/* Largest (max - min over K) of the along- and cross-track positions; with
+ * where (may be NULL): the pings where they are reached and the K with the
+ * lowest and highest along-track position there. */
+static void spreads(sasnav_validation *v, int pairs_only, double *surge, double *sway, int where)
 {
     *surge = *sway = 0;
+    if (where) {
+        v->surge_spread_ping = v->sway_spread_ping = 0;
+        v->surge_spread_k[0] = v->surge_spread_k[1] = v->n_k > 0 ? v->k[0].k : 0;
+    }
     for (int i = 0; i < v->n_pings; i++) {
         double xl = HUGE_VAL, xh = -HUGE_VAL, yl = HUGE_VAL, yh = -HUGE_VAL;
+        int kl = 0, kh = 0;
         for (int k = 0; k < v->n_k; k++) {
             sasnav_pose c = pairs_only ? v->k[k].centroids_pairs[i] : v->k[k].centroids[i];
-            xl = fmin(xl, c.x);
-            xh = fmax(xh, c.x);
+            if (c.x < xl) {
+                xl = c.x;
+                kl = v->k[k].k;
+            }
+            if (c.x > xh) {
+                xh = c.x;
+                kh = v->k[k].k;
+            }
             yl = fmin(yl, c.y);
             yh = fmax(yh, c.y);
         }
-        *surge = fmax(*surge, xh - xl);
-        *sway = fmax(*sway, yh - yl);
+        if (xh - xl > *surge) {
+            *surge = xh - xl;
+            if (where) {
+                v->surge_spread_ping = i;
+                v->surge_spread_k[0] = kl;
+                v->surge_spread_k[1] = kh;
+            }
+        }
+        if (yh - yl > *sway) {
+            *sway = yh - yl;
+            if (where) v->sway_spread_ping = i;
+        }
     }
 }
 
@@ -312,8 +335,8 @@ int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sas
 
     /* 4: spreads. */
     if (!rc) {
-        spreads(out, 0, &out->surge_spread, &out->sway_spread);
-        spreads(out, 1, &out->surge_spread_pairs, &out->sway_spread_pairs);
+        spreads(out, 0, &out->surge_spread, &out->sway_spread, 1);
+        spreads(out, 1, &out->surge_spread_pairs, &out->sway_spread_pairs, 0);
         const sasnav_validate_k *k0 = &out->k[0];
         double sy = 0;
         for (int i = 0; i < n; i++) sy += k0->centroids[i].theta;
