@@ -14,7 +14,14 @@
  *        regularised least-squares reflectivity on a scene grid explaining
  *        every other ping at its current pose (conjugate gradients on the
  *        normal equations, warm-started from the previous ping's scene;
- *        mu = damping x the Rayleigh quotient of the first direction);
+ *        mu = damping x the Rayleigh quotient of the first direction).
+ *        The warm start held q's data and cg_iterations do not remove
+ *        all of it, so q stays partly anchored where it was: the fit is
+ *        between a leave-one-out and a joint one, and that anchoring is
+ *        what keeps it stable: with cg_iterations = 40 an 8-ping run
+ *        drifts apart along the track, and with scenes solved from zero
+ *        its second sweep is undone (docs/navigation.md, "Why the sparse
+ *        phases refine poorly");
  *     2. ping q's pose is moved rigidly along its own array axis (surge)
  *        and across it (sway) to minimise the normalised misfit
  *          c(u, v) = 1 - |<phi_q, T_q(u, v) s>|^2 / (||phi_q||^2 ||T_q s||^2)
