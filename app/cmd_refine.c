@@ -13,7 +13,8 @@
 
 static const char *help =
     "usage: sasnav refine run.h5 nav.h5 -o refined.h5 [--grid X0,X1,NX,Y0,Y1,NY]\n"
-    "                     [--sweeps N] [--surge-range M] [--sway-range M] [--threads N]\n"
+    "                     [--sweeps N] [--surge-range M] [--sway-range M] [--sparsity EPS]\n"
+    "                     [--threads N]\n"
     "\n"
     "Refines a navigation (the output of 'sasnav navigate', or any navigation\n"
     "file of the run's pings) with all pings together: for each ping in turn,\n"
@@ -30,6 +31,9 @@ static const char *help =
     "                    of interest +-0.35 m, 5 mm pixels); it must hold the\n"
     "                    scene's echoes and sample their band\n"
     "  --sweeps N        sweeps over the pings at most (default 4)\n"
+    "  --sparsity EPS    reweighted damping of the scene, pixel i by\n"
+    "                    1 / (|s_i|^2 / mean |s|^2 + EPS) (default 0.01: a\n"
+    "                    scene of few strong scatterers; 0: uniform damping)\n"
     "  --surge-range M   half-width of the surge search, m (default 0.012)\n"
     "  --sway-range M    half-width of the sway search, m (default 0.0015)\n"
     "  --threads N       OpenMP threads (default: all cores)\n"
@@ -67,7 +71,8 @@ int cmd_refine(int argc, char **argv)
         {"grid", required_argument, 0, 'g'},        {"sweeps", required_argument, 0, 's'},
         {"surge-range", required_argument, 0, 'u'}, {"sway-range", required_argument, 0, 'v'},
         {"threads", required_argument, 0, 't'},     {"output", required_argument, 0, 'o'},
-        {"help", no_argument, 0, 'h'},              {0, 0, 0, 0}};
+        {"sparsity", required_argument, 0, 'e'},    {"help", no_argument, 0, 'h'},
+        {0, 0, 0, 0}};
     sasnav_refine_opts ro;
     sasnav_refine_default_opts(&ro);
     const char *output = NULL;
@@ -88,6 +93,10 @@ int cmd_refine(int argc, char **argv)
         case 'v':
             if (cli_parse_double(optarg, &ro.sway_range) || !(ro.sway_range > 0 && ro.sway_range <= 1))
                 return cli_fail("refine", 0, "--sway-range needs a half-width in (0, 1] m");
+            break;
+        case 'e':
+            if (cli_parse_double(optarg, &ro.sparsity) || !(ro.sparsity >= 0 && ro.sparsity <= 1e6))
+                return cli_fail("refine", 0, "--sparsity needs a number in [0, 1e6]");
             break;
         case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_fail("refine", 0, "--threads needs 0..1024"); break;
         case 'o': output = optarg; break;

@@ -19,7 +19,7 @@
 static const char *help =
     "usage: sasnav validate run.h5 -o DIR [--k-min K] [--k-max K]\n"
     "                       [--fix-yaw | --yaw-sigma S] [--surge-sigma S] [--long-baselines]\n"
-    "                       [--k K] [--i I] [--refine [--sweeps N]]\n"
+    "                       [--k K] [--i I] [--refine [--sweeps N] [--sparsity EPS]]\n"
     "                       [--grid X0,X1,NX,Y0,Y1,NY] [--threads N] [--json]\n"
     "\n"
     "The validation method of the paper's tank experiment (Sec. V): from a run\n"
@@ -58,6 +58,8 @@ static const char *help =
     "  --k K, --i I       estimator iterations of the final stage (default 8, 8)\n"
     "  --refine           refine each phase on its own pings (see above)\n"
     "  --sweeps N         refinement sweeps at most (default 4)\n"
+    "  --sparsity EPS     the refinement's reweighted scene damping (default\n"
+    "                     0.01; 0: uniform; see sasnav refine --help)\n"
     "  --grid ...         image grid (default: the track's extent x range of\n"
     "                     interest +-0.35 m, 5 mm pixels)\n"
     "  --threads N        OpenMP threads (default: all cores)\n"
@@ -329,7 +331,8 @@ int cmd_validate(int argc, char **argv)
         {"grid", required_argument, 0, 'g'},  {"threads", required_argument, 0, 't'},
         {"json", no_argument, 0, 'j'},        {"output", required_argument, 0, 'o'},
         {"refine", no_argument, 0, 'R'},   {"sweeps", required_argument, 0, 's'},
-        {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
+        {"sparsity", required_argument, 0, 'e'}, {"help", no_argument, 0, 'h'},
+        {0, 0, 0, 0}};
     sasnav_validate_opts vo;
     sasnav_validate_default_opts(&vo);
     const char *output = NULL;
@@ -360,6 +363,11 @@ int cmd_validate(int argc, char **argv)
         case 's':
             if (cli_parse_int(optarg, 1, SASNAV_REFINE_MAX_SWEEPS, &sweeps))
                 return cli_fail("validate", 0, "--sweeps needs 1..%d", SASNAV_REFINE_MAX_SWEEPS);
+            break;
+        case 'e':
+            if (cli_parse_double(optarg, &vo.refine_opts.sparsity) ||
+                !(vo.refine_opts.sparsity >= 0 && vo.refine_opts.sparsity <= 1e6))
+                return cli_fail("validate", 0, "--sparsity needs a number in [0, 1e6]");
             break;
         case 'o': output = optarg; break;
         case 'h': fputs(help, stdout); return 0;

@@ -52,6 +52,12 @@ static void test_refusals(const sasnav_run *run, const sasnav_ping_pose *start, 
     o.damping = NAN;
     CHECK(sasnav_refine(run, start, &o, out, NULL) == SASNAV_ERR_ARG, "NaN damping");
     o = *base;
+    o.sparsity = -0.01;
+    CHECK(sasnav_refine(run, start, &o, out, NULL) == SASNAV_ERR_ARG, "negative sparsity");
+    o = *base;
+    o.sparsity = INFINITY;
+    CHECK(sasnav_refine(run, start, &o, out, NULL) == SASNAV_ERR_ARG, "infinite sparsity");
+    o = *base;
     o.surge_range = -1e-3;
     CHECK(sasnav_refine(run, start, &o, out, NULL) == SASNAV_ERR_ARG, "negative search range");
     memcpy(bad, start, sizeof *bad * n);

@@ -10,11 +10,16 @@
  * refinement uses that scene:
  *
  *   for each sweep, for each ping q in turn (Gauss-Seidel):
- *     1. s = argmin sum_{p != q} ||T_p s - phi_p||^2 + mu ||s||^2, the
- *        regularised least-squares reflectivity on a scene grid explaining
- *        every other ping at its current pose (conjugate gradients on the
- *        normal equations, warm-started from the previous ping's scene;
- *        mu = damping x the Rayleigh quotient of the first direction).
+ *     1. s = argmin sum_{p != q} ||T_p s - phi_p||^2 + mu ||W^1/2 s||^2,
+ *        the regularised least-squares reflectivity on a scene grid
+ *        explaining every other ping at its current pose (conjugate
+ *        gradients on the normal equations, warm-started from the previous
+ *        ping's scene; mu = damping x the Rayleigh quotient of the first
+ *        direction; W = 1 for the first scene, then reweighted from the
+ *        last scene, W_i = 1 / (|s_i|^2 / mean |s|^2 + sparsity), so that
+ *        the scene is drawn towards a few strong scatterers and cannot
+ *        absorb a pose error by smearing them: without it the phases of
+ *        8 pings never settle, docs/navigation.md).
  *        The warm start held q's data and cg_iterations do not remove
  *        all of it, so q stays partly anchored where it was: the fit is
  *        between a leave-one-out and a joint one, and that anchoring is
@@ -84,6 +89,12 @@ typedef struct {
                              the search cannot hop a fringe) */
     double stop_move;     /* m, stop when a sweep's rms move is below this
                              (default 5e-5) */
+    double sparsity;      /* eps of the reweighted damping (default 0.01):
+                             after each scene, pixel i is damped by
+                             mu / (|s_i|^2 / mean |s|^2 + eps) in the next,
+                             i.e. iteratively reweighted least squares
+                             towards a scene of few strong scatterers;
+                             0: uniform damping mu */
     sasnav_op_opts op;    /* operator options (default tolerance 1e-3) */
     int nthreads;         /* OpenMP threads (0 = OpenMP default) */
 } sasnav_refine_opts;

@@ -23,6 +23,7 @@ void sasnav_refine_default_opts(sasnav_refine_opts *o)
     o->surge_range = 0.012;
     o->sway_range = 0.0015;
     o->stop_move = 5e-5;
+    o->sparsity = 0.01;
     sasnav_op_default_opts(&o->op);
     o->op.tolerance = 1e-3;
 }
@@ -39,6 +40,7 @@ typedef struct {
     sasnav_cfloat *td;  /* n * nd: per-ping forward outputs */
     sasnav_cfloat *td2; /* nthreads * nd: trial predictions */
     double mu;          /* absolute damping, < 0 until set */
+    float *w;           /* np: per-pixel damping weights (NULL: uniform) */
 } refine_ctx;
 
 static double energy(const sasnav_cfloat *a, size_t n)
@@ -101,14 +103,14 @@ static int scene_solve(refine_ctx *c, int skip, int iterations, sasnav_cfloat *s
     }
     /* r = rhs - A s */
     if ((rc = normal_apply(c, skip, s, ad))) return rc;
-    for (size_t i = 0; i < np; i++) r[i] -= ad[i] + (float)c->mu * s[i];
+    for (size_t i = 0; i < np; i++) r[i] -= ad[i] + (float)c->mu * (c->w ? c->w[i] : 1.0f) * s[i];
     memcpy(d, r, sizeof *d * np);
     double rr = energy(r, np);
     for (int it = 0; it < iterations && rr > 1e-14 * eb; it++) {
         if ((rc = normal_apply(c, skip, d, ad))) return rc;
         double complex dad = 0;
         for (size_t i = 0; i < np; i++) {
-            ad[i] += (float)c->mu * d[i];
+            ad[i] += (float)c->mu * (c->w ? c->w[i] : 1.0f) * d[i];
             dad += conj(d[i]) * ad[i];
         }
         if (!(creal(dad) > 0)) break;
@@ -123,6 +125,20 @@ static int scene_solve(refine_ctx *c, int skip, int iterations, sasnav_cfloat *s
         for (size_t i = 0; i < np; i++) d[i] = r[i] + beta * d[i];
     }
     return SASNAV_OK;
+}
+
+/* Reweighted damping from the scene just solved: pixel i is damped by
+ * mu / (|s_i|^2 / mean |s|^2 + eps), so that the next scene keeps its
+ * strong scatterers and is pushed towards zero elsewhere (iteratively
+ * reweighted least squares towards a scene of few scatterers). */
+static void update_weights(refine_ctx *c, const sasnav_cfloat *s)
+{
+    double m = energy(s, c->np) / (double)c->np;
+    if (!(m > 0)) return;
+    for (size_t i = 0; i < c->np; i++) {
+        double a = ((double)crealf(s[i]) * crealf(s[i]) + (double)cimagf(s[i]) * cimagf(s[i])) / m;
+        c->w[i] = (float)(1.0 / (a + c->o->sparsity));
+    }
 }
 
 /* Ping pose moved by (u, v) along / across its array axis. */
@@ -261,6 +277,8 @@ static int check_opts(const sasnav_refine_opts *o)
     if (!(o->surge_range > 0) || !(o->sway_range > 0) || !isfinite(o->surge_range) || !isfinite(o->sway_range) ||
         o->surge_range > 1 || o->sway_range > 1)
         return sasnav_set_error(SASNAV_ERR_ARG, "refinement search ranges must be in (0, 1] m");
+    if (!(o->sparsity >= 0) || !isfinite(o->sparsity))
+        return sasnav_set_error(SASNAV_ERR_ARG, "refinement sparsity must be >= 0");
     if (!(o->stop_move >= 0) || !isfinite(o->stop_move))
         return sasnav_set_error(SASNAV_ERR_ARG, "refinement stop_move must be >= 0");
     if (o->nthreads < 0) return sasnav_set_error(SASNAV_ERR_ARG, "negative thread count");
@@ -322,11 +340,14 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const s
     c.tb = malloc(sizeof *c.tb * c.np * n);
     c.td = malloc(sizeof *c.td * c.nd * n);
     c.td2 = malloc(sizeof *c.td2 * c.nd * c.nthreads);
+    if (o.sparsity > 0) c.w = malloc(sizeof *c.w * c.np);
     sasnav_cfloat *s = calloc(c.np, sizeof *s), *r = malloc(sizeof *r * c.np), *d = malloc(sizeof *d * c.np),
                   *ad = malloc(sizeof *ad * c.np);
-    if (!px || !py || !cur || !c.op || !c.top || !c.tb || !c.td || !c.td2 || !s || !r || !d || !ad)
+    if (!px || !py || !cur || !c.op || !c.top || !c.tb || !c.td || !c.td2 || !s || !r || !d || !ad ||
+        (o.sparsity > 0 && !c.w))
         rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     if (!rc) {
+        for (size_t i = 0; c.w && i < c.np; i++) c.w[i] = 1.0f;
         sasnav_grid_points(&grid, (sasnav_pose){0, 0, 0}, px, py);
         memcpy(cur, nav_in, sizeof *cur * n);
     }
@@ -356,6 +377,7 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const s
         for (int q = 0; q < n && !rc; q++) {
             rc = scene_solve(&c, q, first ? o.cg_first : o.cg_iterations, s, r, d, ad);
             first = 0;
+            if (!rc && c.w) update_weights(&c, s);
             double u = 0, v = 0, cost = 0;
             if (!rc) {
                 misfit_arg a = {&c, q, 0, &cur[q], s, energy(sasnav_run_ping(run, q), c.nd), SASNAV_OK, 0};
@@ -417,6 +439,7 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const s
     free(c.tb);
     free(c.td);
     free(c.td2);
+    free(c.w);
     free(px);
     free(py);
     free(cur);
