@@ -30,7 +30,7 @@ static const char *help =
     "  --grid ...        scene grid (default: the nominal track's extent x range\n"
     "                    of interest +-0.35 m, 5 mm pixels); it must hold the\n"
     "                    scene's echoes and sample their band\n"
-    "  --sweeps N        sweeps over the pings at most (default 4)\n"
+    "  --sweeps N        sweeps over the pings at most (default 8)\n"
     "  --sparsity EPS    reweighted damping of the scene, pixel i by\n"
     "                    1 / (|s_i|^2 / mean |s|^2 + EPS) (default 0.01: a\n"
     "                    scene of few strong scatterers; 0: uniform damping)\n"

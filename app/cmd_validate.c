@@ -57,7 +57,7 @@ static const char *help =
     "                     combine by least squares\n"
     "  --k K, --i I       estimator iterations of the final stage (default 8, 8)\n"
     "  --refine           refine each phase on its own pings (see above)\n"
-    "  --sweeps N         refinement sweeps at most (default 4)\n"
+    "  --sweeps N         refinement sweeps at most (default 8)\n"
     "  --sparsity EPS     the refinement's reweighted scene damping (default\n"
     "                     0.01; 0: uniform; see sasnav refine --help)\n"
     "  --grid ...         image grid (default: the track's extent x range of\n"

@@ -75,7 +75,7 @@ typedef struct {
                              nominal track's along-track extent x the range
                              of interest +-0.35 m, 5 mm pixels (pixels must
                              sample the scene's band: see docs/navigation.md) */
-    int sweeps;           /* maximum sweeps over the pings (default 4, <= 32) */
+    int sweeps;           /* maximum sweeps over the pings (default 8, <= 32) */
     int cg_first;         /* CG iterations of the first scene (default 40) */
     int cg_iterations;    /* CG iterations of each later, warm-started scene
                              (default 12) */

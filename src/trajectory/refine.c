@@ -16,7 +16,7 @@ void sasnav_refine_default_opts(sasnav_refine_opts *o)
 {
     if (!o) return;
     memset(o, 0, sizeof *o);
-    o->sweeps = 4;
+    o->sweeps = 8;
     o->cg_first = 40;
     o->cg_iterations = 12;
     o->damping = 1e-3;
