@@ -26,7 +26,7 @@
  *        what keeps it stable: with cg_iterations = 40 an 8-ping run
  *        drifts apart along the track, and with scenes solved from zero
  *        its second sweep is undone (docs/navigation.md, "Why the sparse
- *        phases refine poorly");
+ *        phases refined poorly");
  *     2. ping q's pose is moved rigidly along its own array axis (surge)
  *        and across it (sway) to minimise the normalised misfit
  *          c(u, v) = 1 - |<phi_q, T_q(u, v) s>|^2 / (||phi_q||^2 ||T_q s||^2)
