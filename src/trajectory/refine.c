@@ -40,7 +40,7 @@ typedef struct {
     sasnav_cfloat *td;  /* n * nd: per-ping forward outputs */
     sasnav_cfloat *td2; /* nthreads * nd: trial predictions */
     double mu;          /* absolute damping, < 0 until set */
-    float *w;           /* np: per-pixel damping weights (NULL: uniform) */
+    float *w;           /* np: per-pixel damping weights (all 1: uniform) */
 } refine_ctx;
 
 static double energy(const sasnav_cfloat *a, size_t n)
@@ -103,14 +103,14 @@ static int scene_solve(refine_ctx *c, int skip, int iterations, sasnav_cfloat *s
     }
     /* r = rhs - A s */
     if ((rc = normal_apply(c, skip, s, ad))) return rc;
-    for (size_t i = 0; i < np; i++) r[i] -= ad[i] + (float)c->mu * (c->w ? c->w[i] : 1.0f) * s[i];
+    for (size_t i = 0; i < np; i++) r[i] -= ad[i] + (float)c->mu * c->w[i] * s[i];
     memcpy(d, r, sizeof *d * np);
     double rr = energy(r, np);
     for (int it = 0; it < iterations && rr > 1e-14 * eb; it++) {
         if ((rc = normal_apply(c, skip, d, ad))) return rc;
         double complex dad = 0;
         for (size_t i = 0; i < np; i++) {
-            ad[i] += (float)c->mu * (c->w ? c->w[i] : 1.0f) * d[i];
+            ad[i] += (float)c->mu * c->w[i] * d[i];
             dad += conj(d[i]) * ad[i];
         }
         if (!(creal(dad) > 0)) break;
@@ -340,14 +340,13 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const s
     c.tb = malloc(sizeof *c.tb * c.np * n);
     c.td = malloc(sizeof *c.td * c.nd * n);
     c.td2 = malloc(sizeof *c.td2 * c.nd * c.nthreads);
-    if (o.sparsity > 0) c.w = malloc(sizeof *c.w * c.np);
+    c.w = malloc(sizeof *c.w * c.np);
     sasnav_cfloat *s = calloc(c.np, sizeof *s), *r = malloc(sizeof *r * c.np), *d = malloc(sizeof *d * c.np),
                   *ad = malloc(sizeof *ad * c.np);
-    if (!px || !py || !cur || !c.op || !c.top || !c.tb || !c.td || !c.td2 || !s || !r || !d || !ad ||
-        (o.sparsity > 0 && !c.w))
+    if (!px || !py || !cur || !c.op || !c.top || !c.tb || !c.td || !c.td2 || !s || !r || !d || !ad || !c.w)
         rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     if (!rc) {
-        for (size_t i = 0; c.w && i < c.np; i++) c.w[i] = 1.0f;
+        for (size_t i = 0; i < c.np; i++) c.w[i] = 1.0f;
         sasnav_grid_points(&grid, (sasnav_pose){0, 0, 0}, px, py);
         memcpy(cur, nav_in, sizeof *cur * n);
     }
@@ -377,7 +376,7 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const s
         for (int q = 0; q < n && !rc; q++) {
             rc = scene_solve(&c, q, first ? o.cg_first : o.cg_iterations, s, r, d, ad);
             first = 0;
-            if (!rc && c.w) update_weights(&c, s);
+            if (!rc && o.sparsity > 0) update_weights(&c, s);
             double u = 0, v = 0, cost = 0;
             if (!rc) {
                 misfit_arg a = {&c, q, 0, &cur[q], s, energy(sasnav_run_ping(run, q), c.nd), SASNAV_OK, 0};
