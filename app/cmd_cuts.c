@@ -158,7 +158,7 @@ static int maps_of_preset(const char *preset, int n, sasnav_pair_opts *po, const
             *pose_comp(&err, a) = t[it];
             sc.traj.pair_error = err;
             sasnav_run *run = NULL;
-            rc = sasnav_simulate(&sc, scene, &po->op, &run);
+            rc = sasnav_simulate(&sc, scene, NULL, &run);
             sasnav_pair *pair = NULL;
             if (!rc) rc = sasnav_pair_create(&run->sys, &run->array, &run->win, po, &pair);
             int same = 0;

@@ -15,7 +15,7 @@
 static const char *help =
     "usage: sasnav navigate run.h5 [--method subspace|dpca] [--long-baselines]\n"
     "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
-    "                       [--cross-extent M]\n"
+    "                       [--cross-extent M] [--range-extent M]\n"
     "                       [--threads N] [--json]\n"
     "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
     "\n"
@@ -43,13 +43,15 @@ static const char *help =
     "                    pair --help')\n"
     "  --cross-extent M  along-track extent of the estimation grid (see\n"
     "                    'sasnav pair --help')\n"
+    "  --range-extent M  range extent of the estimation grid (m, default 0.8)\n"
     "  --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)\n"
     "  --first-pose X,Y,YAW  place the trajectory so that the first ping's PCA\n"
     "                    centroid is at this world pose (an external fix:\n"
     "                    GNSS, USBL); default: the run's nominal first ping\n"
     "  --anchor-truth    the same with the run's true first pose (simulations:\n"
     "                    the written navigation then images on the truth's grid)\n"
-    "  --threads N       OpenMP threads (default: all cores)\n"
+    "  --threads N       OpenMP threads (default: all cores); with several, pairs\n"
+    "                    are estimated concurrently (same results, bit for bit)\n"
     "  --json            machine-readable summary on stdout\n"
     "  -o FILE           output navigation file (HDF5)\n"
     "\n"
@@ -139,6 +141,8 @@ static void print_json(const char *input, const sasnav_navigation *nav)
     json_object_set_new(root, "least_squares_iterations", json_integer(nav->lsq_iterations));
     json_object_set_new(root, "seconds", real_or_null(nav->seconds));
     json_object_set_new(root, "seconds_per_pair", real_or_null(nav->seconds_per_pair));
+    json_object_set_new(root, "pairs_per_second", real_or_null(nav->pairs_per_second));
+    json_object_set_new(root, "threads_over_pairs", json_integer(nav->threads_over_pairs));
     char *text = json_dumps(root, JSON_INDENT(2) | JSON_REAL_PRECISION(10));
     if (text) puts(text);
     free(text);
@@ -168,8 +172,9 @@ static void print_text(const sasnav_navigation *nav)
         printf("rms cumulative error:   surge %.3f mm, sway %.4f mm, yaw %.3e rad\n",
                1e3 * nav->rms_cumulative.x, 1e3 * nav->rms_cumulative.y, nav->rms_cumulative.theta);
     }
-    printf("%d pairs in %.2f s (%.2f s per pair)\n", nav->n_pairs, nav->seconds,
-           nav->seconds_per_pair);
+    printf("%d pairs in %.2f s (%.2f s per pair; %.2f pairs/s with %d pair%s at a time)\n",
+           nav->n_pairs, nav->seconds, nav->seconds_per_pair, nav->pairs_per_second,
+           nav->threads_over_pairs, nav->threads_over_pairs == 1 ? "" : "s");
 }
 
 int cmd_navigate(int argc, char **argv)
@@ -181,6 +186,7 @@ int cmd_navigate(int argc, char **argv)
         {"yaw-sigma", required_argument, 0, 'y'}, {"first-pose", required_argument, 0, 'f'},
         {"anchor-truth", no_argument, 0, 'A'}, {"fix-yaw", no_argument, 0, 'F'},
         {"cross-extent", required_argument, 0, 'X'}, {"surge-sigma", required_argument, 0, 'U'},
+        {"range-extent", required_argument, 0, 'E'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -225,6 +231,11 @@ int cmd_navigate(int argc, char **argv)
         case 'X':
             if (cli_parse_double(optarg, &no.pair.cross_extent) || !(no.pair.cross_extent > 0))
                 return cli_fail("navigate", 0, "--cross-extent needs a positive length (m)");
+            break;
+        case 'E':
+            if (cli_parse_double(optarg, &no.pair.range_extent) ||
+                !(no.pair.range_extent > 0 && no.pair.range_extent <= 100))
+                return cli_fail("navigate", 0, "--range-extent needs a length in (0, 100] m");
             break;
         case 'j': json = 1; break;
         case 'o': output = optarg; break;

@@ -14,7 +14,7 @@
 static const char *help =
     "usage: sasnav pair run.h5 [--p I --q J] [--json] [--k K] [--i I]\n"
     "                   [--prior S,W,Y] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
-    "                   [--cross-extent M]\n"
+    "                   [--cross-extent M] [--range-extent M]\n"
     "                   [--no-global] [--subintervals N]\n"
     "                   [--range R] [--lag-model fixed|motion] [--threads N]\n"
     "\n"
@@ -37,6 +37,8 @@ static const char *help =
     "                    rad; default 0.06, 0.035 and the grating-lobe-safe yaw)\n"
     "  --range R         centre range of the estimation grid (default: the run's\n"
     "                    range of interest)\n"
+    "  --range-extent M  range extent of the estimation grid (m, default 0.8;\n"
+    "                    split between the sub-intervals)\n"
     "  --subintervals N  split the swath into N range sub-intervals, each with\n"
     "                    its own EPCA offset and estimate (paper III-B)\n"
     "  --lag-model M     Tx-array offset per sub-interval: 'fixed' (the run's\n"
@@ -72,11 +74,12 @@ int cmd_pair(int argc, char **argv)
         {"lag-model", required_argument, 0, 'L'}, {"box", required_argument, 0, 'b'},
         {"yaw-sigma", required_argument, 0, 'y'}, {"fix-yaw", no_argument, 0, 'F'},
         {"cross-extent", required_argument, 0, 'X'}, {"surge-sigma", required_argument, 0, 'U'},
+        {"range-extent", required_argument, 0, 'E'},
         {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
     long p = 0, q = 1, k = 8, iters = 8, nsub = 1, threads = 0;
     int json = 0, no_global = 0, have_p = 0, have_q = 0, motion_lag = 0, fix_yaw = 0;
     double prior[3] = {0, 0, 0}, range = NAN, box[3] = {NAN, NAN, NAN}, yaw_sigma = 0, cross_extent = 0,
-           surge_sigma = 0;
+           surge_sigma = 0, range_extent = 0;
     int opt;
     optind = 1;
     while ((opt = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
@@ -96,6 +99,10 @@ int cmd_pair(int argc, char **argv)
         case 'X':
             if (cli_parse_double(optarg, &cross_extent) || !(cross_extent > 0))
                 return cli_fail("pair", 0, "--cross-extent needs a positive length (m)");
+            break;
+        case 'E':
+            if (cli_parse_double(optarg, &range_extent) || !(range_extent > 0 && range_extent <= 100))
+                return cli_fail("pair", 0, "--range-extent needs a length in (0, 100] m");
             break;
         case 'y':
             if (cli_parse_double(optarg, &yaw_sigma) || !(yaw_sigma >= 0))
@@ -158,6 +165,7 @@ int cmd_pair(int argc, char **argv)
     po.surge_sigma = surge_sigma;
     po.fix_yaw = fix_yaw;
     if (cross_extent > 0) po.cross_extent = cross_extent;
+    if (range_extent > 0) po.range_extent = range_extent;
     double extent = po.range_extent;
     int failed = 0;
     for (int s = 0; s < nsub; s++) {

@@ -32,7 +32,7 @@ static void run_case(sasnav_pose err, const sasnav_pair_opts *po, sweep_case *c)
     sc.traj.pair_error = err;
     c->truth = err;
     sasnav_run *run = NULL;
-    if (sasnav_simulate(&sc, NULL, &po->op, &run)) {
+    if (sasnav_simulate(&sc, NULL, NULL, &run)) {
         c->dpca_rc = c->sub_rc = -1;
         return;
     }

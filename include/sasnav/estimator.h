@@ -12,14 +12,17 @@
  * ahead of the centroid, Tx tx_lag/2 behind, so that the centroid is the PCA
  * centroid of SPEC 1.
  *
- * Search (docs/estimator.md): a coarse global stage on a blurred zeta at
- * reduced resolution and iterations over the whole search box, a local
- * stage on zeta, then a local stage on eta with a check of the neighbouring
- * sway fringes (eta oscillates along sway with period lambda/2). Optimisers
- * from NLopt.
+ * Search (docs/estimator.md): a global stage (image-shift valley scan of
+ * zeta, then BOBYQA from NLopt at coarse pixels), a local stage on zeta and
+ * one on eta at coarse iterations (Levenberg-Marquardt on the residual
+ * vectors whose norms zeta and eta are, with a check of the neighbouring
+ * sway fringes: eta oscillates along sway with period lambda/2), then a
+ * Newton step at the final iterations (k, i) on the quadratic model of eta
+ * measured from ten residual vectors.
  *
- * Thread safety: one estimator object per thread. Internally the operators
- * use opts.nthreads OpenMP threads.
+ * Thread safety: one estimator object per thread (sasnav_navigate runs one
+ * per thread over pairs). Internally the operators use opts.nthreads
+ * OpenMP threads; the results do not depend on that number.
  */
 #ifndef SASNAV_ESTIMATOR_H
 #define SASNAV_ESTIMATOR_H
@@ -47,7 +50,9 @@ typedef struct {
     sasnav_norm norm;
     double tx_lag;         /* m, EPCA Tx-array offset (default 0.10) */
     double range;          /* m, centre range of the estimation grid (default 10) */
-    double range_extent;   /* m, range extent of the grid (default 1.6) */
+    double range_extent;   /* m, range extent of the grid (default 0.8: half
+                              the cost of the former 1.6 m; accuracy in
+                              docs/estimator.md) */
     double cross_extent;   /* m, along-track extent of the grid (default 0: 80 %
                               of the element beam's footprint between first
                               nulls at the grid's range, 1.6 R lambda / D,
@@ -94,7 +99,8 @@ typedef struct {
                               paper-pair, < 1e-3 once no phase centres overlap) */
     int max_evaluations;   /* per local stage (default 400) */
     int nthreads;          /* OpenMP threads for the operators (0 = default) */
-    sasnav_op_opts op;     /* operator options */
+    sasnav_op_opts op;     /* operator options (default: sasnav_op's, with
+                              tolerance 1e-3: docs/estimator.md) */
 } sasnav_pair_opts;
 
 void sasnav_pair_default_opts(sasnav_pair_opts *opts);
@@ -118,6 +124,13 @@ typedef struct {
     int evaluations_global, evaluations_zeta, evaluations_eta;
     long applications;         /* total operator applications (T or T^H) */
     double seconds;            /* wall time */
+    /* Where the time goes (summed over the candidates carried through):
+     * wall seconds and operator applications of the overlap check and the
+     * global stage, the zeta stage, the eta stage at level 1 (fringe checks
+     * included), and the final stage at level 2 (k, i). */
+    double seconds_global, seconds_zeta, seconds_eta, seconds_final;
+    long applications_global, applications_zeta, applications_eta, applications_final;
+    int evaluations_final;     /* of evaluations_eta, those at level 2 */
 } sasnav_pair_result;
 
 typedef struct sasnav_pair sasnav_pair;

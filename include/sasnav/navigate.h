@@ -39,10 +39,15 @@
  * The library never prints: progress is reported through the optional
  * callback in the options.
  *
- * Thread safety: re-entrant for distinct runs and outputs; the callback is
- * called from the calling thread. The pairs are estimated one after the
- * other by one estimator object (sasnav_pair_set_data per pair); the
- * operators inside use opts.nthreads OpenMP threads.
+ * Thread safety: re-entrant for distinct runs and outputs. With more than
+ * one thread (opts.nthreads, or OpenMP's default) the independent pairs are
+ * estimated concurrently, one estimator object per thread (reused through
+ * sasnav_pair_set_data) whose operators run on one thread; with one thread
+ * the pairs go one after the other. The results are the same bits whatever
+ * the thread count (each pair depends on its own data only, and the
+ * operators sum in a fixed order). The progress callback may then be called
+ * from any of those threads, never from two at once, with `done` counting
+ * finished pairs in the order they finish.
  */
 #ifndef SASNAV_NAVIGATE_H
 #define SASNAV_NAVIGATE_H
@@ -145,6 +150,10 @@ typedef struct {
     double seconds;               /* the whole call */
     double seconds_pairs;         /* sum of the pair estimates */
     double seconds_per_pair;      /* seconds_pairs / pairs estimated */
+    double seconds_estimation;    /* wall time of all pair estimates */
+    double pairs_per_second;      /* n_pairs / seconds_estimation */
+    int threads_over_pairs;       /* pairs estimated concurrently (1: one
+                                     after the other) */
 } sasnav_navigation;
 
 /* Navigates `run` (at least 2 pings, validated with sasnav_run_check).

@@ -15,7 +15,24 @@ typedef struct {
     int k, i;
     sasnav_grid grid;
     size_t np, nd;
-    sasnav_op *op_p, *op_q;
+    sasnav_op *op_p, *op_q;  /* level 2 borrows level 1's (same grid) */
+    int borrowed;            /* 1: op_p, op_q belong to another level */
+    /* The hypothesis op_q was last placed at (valid: q_placed), so that a
+     * repeated hypothesis skips set_geometry. Kept by the owning level. */
+    sasnav_pose q_sigma;
+    int q_placed;
+    /* The last evaluation at this level, returned again for a repeated
+     * hypothesis (optimisers re-evaluate their final point). */
+    sasnav_pose last_error;
+    int last_blurred, last_valid;
+    double last_zeta, last_eta, last_overlap, last_nrm;
+    /* Values (not psi) of the last PAIR_KEEP evaluations. */
+    struct {
+        sasnav_pose error;
+        int blurred;
+        double zeta, eta, overlap;
+    } kept[4];
+    int n_kept, next_kept;
     sasnav_cfloat *rho_p, *rho_q, *psi_p, *psi_q, *tmp, *data_tmp, *cgls_work;
     double *mod_p, *mod_q, *blur_tmp;
     float *window;
@@ -45,5 +62,13 @@ struct sasnav_pair {
  * the hypothesised error relative to p's image, from the peak of the
  * cross-correlation of their moduli at `level`. */
 int pair_image_shift(sasnav_pair *pr, int level, sasnav_pose error, double *sx, double *sy);
+
+/* Evaluates at `level` (as sasnav_pair_eval, unblurred) and writes the
+ * residual vector whose norm is the error function: eta ? (psi_p - psi_q) /
+ * nrm : (|psi_p| - |psi_q|) / nrm (real, in the real parts), windowed; np
+ * entries (pair_level_points). *f receives its norm (eta or zeta). */
+int pair_eval_residual(sasnav_pair *pr, sasnav_pose error, int level, int use_eta,
+                       sasnav_cfloat *r, double *f);
+size_t pair_level_points(const sasnav_pair *pr, int level);
 
 #endif

@@ -1,16 +1,18 @@
 /* The search for the displacement (paper Section III-A, procedure 1-3, and
- * docs/estimator.md):
- *   0. global stage: grid search of a blurred zeta at coarse pixels and
- *      coarse (k, i) over the search box: first (surge, yaw) with sway at
- *      the prior, then sway at the best (surge, yaw), then a bounded local
- *      refinement of the blurred zeta (NLopt BOBYQA);
- *   1. zeta stage: local minimisation of zeta (coarse k, i; full pixels is
- *      level 1 with coarse iterations is not offered: level 1 is used) from
- *      the global result;
- *   2. eta stage: local minimisation of eta from the zeta result, started
- *      also one sway fringe (lambda/2) either side when eta there is lower.
+ * docs/estimator.md, "Search"):
+ *   0. global stage: the image shift of q's content against p's fixes a
+ *      1-D valley of hypotheses; zeta (level 1) is scanned along it, its
+ *      local minima are the candidates, the best is refined by BOBYQA
+ *      (NLopt) on zeta at level 0;
+ *   1. zeta stage (level 1): Levenberg-Marquardt on the residual vector
+ *      |psi_p| - |psi_q| (Broyden-updated Jacobian, a parabola along each
+ *      step);
+ *   2. eta stage: the same on psi_p - psi_q at level 1, from the zeta
+ *      result and one sway fringe (lambda/2) either side when eta is lower
+ *      there; then at level 2 (final k, i) a Newton step on the quadratic
+ *      model of eta measured from ten residual vectors, and one correction.
  * Steps and bounds derive from the geometry: phase-centre spacing, range and
- * wavelength. */
+ * wavelength. Why each choice: docs/estimator.md, "Search cost". */
 #include "pair_internal.h"
 #include "core/clock.h"
 
@@ -107,6 +109,461 @@ static int local_stage(stage_ctx *c, sasnav_pose start, sasnav_pose step, sasnav
     return res == NLOPT_MAXEVAL_REACHED ? SASNAV_ERR_NOT_CONVERGED : SASNAV_OK;
 }
 
+/* Solves the n x n (n <= 3) system M d = b by Gaussian elimination with
+ * partial pivoting. Returns 0 when M is singular. */
+static int solve_small(int n, double M[3][3], const double *b, double *d)
+{
+    double a[3][4];
+    for (int i = 0; i < n; i++) {
+        for (int j = 0; j < n; j++) a[i][j] = M[i][j];
+        a[i][n] = b[i];
+    }
+    for (int c = 0; c < n; c++) {
+        int p = c;
+        for (int i = c + 1; i < n; i++)
+            if (fabs(a[i][c]) > fabs(a[p][c])) p = i;
+        if (!(fabs(a[p][c]) > 0)) return 0;
+        if (p != c)
+            for (int j = 0; j <= n; j++) {
+                double t = a[c][j];
+                a[c][j] = a[p][j];
+                a[p][j] = t;
+            }
+        for (int i = c + 1; i < n; i++) {
+            double f = a[i][c] / a[c][c];
+            for (int j = c; j <= n; j++) a[i][j] -= f * a[c][j];
+        }
+    }
+    for (int i = n - 1; i >= 0; i--) {
+        double t = a[i][n];
+        for (int j = i + 1; j < n; j++) t -= a[i][j] * d[j];
+        d[i] = t / a[i][i];
+        if (!isfinite(d[i])) return 0;
+    }
+    return 1;
+}
+
+/* The surge prior's factor at unit point u (1 without a prior, ps = 0). */
+static double prior_factor(const stage_ctx *c, double ps, const double *u)
+{
+    if (!(ps > 0)) return 1.0;
+    double x = (c->centre.x + c->scale.x * u[0] - sasnav_pair_options(c->pr)->prior.x) / ps;
+    return 1.0 + x * x;
+}
+
+/* Shortens step d (keeping its direction per axis) to stay in the box. */
+static void clip_step(int n, const double *u, double *d, const double *lb, const double *ub)
+{
+    for (int k = 0; k < n; k++) {
+        double v = u[k] + d[k];
+        v = v < lb[k] ? lb[k] : v > ub[k] ? ub[k] : v;
+        d[k] = v - u[k];
+    }
+}
+
+/* Residual of the stage at unit point u (evaluation counted). */
+static int stage_residual(stage_ctx *c, const double *u, sasnav_cfloat *r, double *f)
+{
+    c->evals++;
+    return pair_eval_residual(c->pr, from_unit(c, u), c->level, c->use_eta, r, f);
+}
+
+/* Levenberg-Marquardt on the residual vector of the error function
+ * (docs/estimator.md, "Search cost"): eta (or zeta) is the norm of a vector
+ * r(sigma) of np entries, so one forward-difference Jacobian (ndim extra
+ * evaluations) gives the gradient and a Gauss-Newton model of the whole
+ * bowl, where a derivative-free optimiser sees one number per evaluation.
+ * After an accepted step the Jacobian is carried by a Broyden update (no
+ * evaluations); a rejected step with a carried Jacobian computes a fresh
+ * one. The objective is f(u)^2 P(u)^2 with P the surge prior's factor
+ * (use_prior), i.e. the same minimiser as f P. Units: one unit = one step;
+ * bounds +-hw units; stops when a step moves less than xtol units. */
+static int lm_stage(stage_ctx *c, sasnav_pose start, sasnav_pose step, sasnav_pose hw,
+                    double xtol, int max_evals, sasnav_pose *best, double *fbest)
+{
+    sasnav_pair *pr = c->pr;
+    const sasnav_pair_opts *o = sasnav_pair_options(pr);
+    c->centre = start;
+    c->scale = step;
+    c->evals = 0;
+    c->rc = 0;
+    c->ndim = o->fix_yaw ? 2 : 3;
+    const int n = c->ndim;
+    const size_t np = pair_level_points(pr, c->level);
+    sasnav_cfloat *buf = malloc(sizeof(sasnav_cfloat) * np * (size_t)(n + 3));
+    if (!buf) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the local search");
+    sasnav_cfloat *r0 = buf, *rt = buf + np, *r1 = buf + 2 * np;
+    sasnav_cfloat *J[3] = {buf + 3 * np, buf + 4 * np, n > 2 ? buf + 5 * np : NULL};
+    double lb[3] = {-hw.x, -hw.y, -hw.theta}, ub[3] = {hw.x, hw.y, hw.theta};
+    double u[3] = {0, 0, 0}, f0 = 0, ft = 0;
+    /* The surge prior's factor P = 1 + ((x - prior) / s)^2 along unit 0. */
+    double ps = c->use_prior && o->surge_sigma > 0 ? o->surge_sigma : 0;
+    const double h = 0.1; /* forward-difference step, units */
+    int rc = stage_residual(c, u, r0, &f0);
+    int have_j = 0, fresh = 0, rejects = 0;
+    double mu = 1e-3;
+    while (!rc && c->evals < max_evals) {
+        if (!have_j) {
+            for (int k = 0; k < n && !rc; k++) {
+                double ut[3] = {u[0], u[1], u[2]}, hk = u[k] + h <= ub[k] ? h : -h;
+                ut[k] += hk;
+                rc = stage_residual(c, ut, rt, &ft);
+                for (size_t j = 0; !rc && j < np; j++) J[k][j] = (rt[j] - r0[j]) / (float)hk;
+            }
+            if (rc) break;
+            have_j = fresh = 1;
+        }
+        /* Normal equations of the model |r0 + J d|^2 P^2 (double). */
+        double A[3][3] = {{0}}, g[3] = {0}, S = 0;
+        for (int k = 0; k < n; k++) {
+            double gk = 0;
+            for (size_t j = 0; j < np; j++)
+                gk += (double)crealf(J[k][j]) * crealf(r0[j]) + (double)cimagf(J[k][j]) * cimagf(r0[j]);
+            g[k] = gk;
+            for (int m = 0; m <= k; m++) {
+                double a = 0;
+                for (size_t j = 0; j < np; j++)
+                    a += (double)crealf(J[k][j]) * crealf(J[m][j]) + (double)cimagf(J[k][j]) * cimagf(J[m][j]);
+                A[k][m] = A[m][k] = a;
+            }
+        }
+        for (size_t j = 0; j < np; j++)
+            S += (double)crealf(r0[j]) * crealf(r0[j]) + (double)cimagf(r0[j]) * cimagf(r0[j]);
+        double P = prior_factor(c, ps, u), dP = 0, d2P = 0;
+        if (ps > 0) {
+            double x = (c->centre.x + c->scale.x * u[0] - o->prior.x) / ps;
+            dP = 2 * x * c->scale.x / ps;
+            d2P = 2 * c->scale.x * c->scale.x / (ps * ps);
+        }
+        /* F = S W, W = P^2: grad F = 2 W g + S W' e0, Hess ~ 2 W A +
+         * 2 (g W' e0^T + e0 W' g^T) + S W'' e0 e0^T. */
+        double W = P * P, W1 = 2 * P * dP, W2 = 2 * (dP * dP + P * d2P);
+        double H[3][3], G[3];
+        for (int k = 0; k < n; k++) {
+            G[k] = 2 * W * g[k] + (k == 0 ? S * W1 : 0);
+            for (int m = 0; m < n; m++) H[k][m] = 2 * W * A[k][m];
+        }
+        if (ps > 0) {
+            for (int k = 0; k < n; k++) {
+                H[k][0] += 2 * g[k] * W1;
+                H[0][k] += 2 * g[k] * W1;
+            }
+            H[0][0] += S * W2;
+        }
+        double d[3] = {0, 0, 0}, M[3][3], mb[3];
+        for (int k = 0; k < n; k++) {
+            for (int m = 0; m < n; m++) M[k][m] = H[k][m];
+            M[k][k] += mu * (fabs(H[k][k]) + 1e-12 * (fabs(H[0][0]) + 1e-300));
+            mb[k] = -G[k];
+        }
+        if (!solve_small(n, M, mb, d)) {
+            mu *= 10;
+            if (mu > 1e8) break;
+            continue;
+        }
+        clip_step(n, u, d, lb, ub);
+        double dmax = 0, slope = 0;
+        for (int k = 0; k < n; k++) {
+            dmax = fabs(d[k]) > dmax ? fabs(d[k]) : dmax;
+            slope += G[k] * d[k];
+        }
+        if (dmax < 1e-6 || !(slope < 0)) {
+            if (fresh) break;
+            have_j = 0;
+            continue;
+        }
+        double F0 = f0 * f0 * W;
+        double ut[3] = {u[0] + d[0], u[1] + d[1], u[2] + d[2]};
+        rc = stage_residual(c, ut, rt, &ft);
+        if (rc) break;
+        double Ft = ft * prior_factor(c, ps, ut);
+        Ft *= Ft;
+        /* The model's curvature along d is that of |J d|^2 only (no second
+         * derivatives of r): along the flat surge-yaw valley the steps fall
+         * short (each ~60 % of the way on paper-pair). A parabola through
+         * F0, F(d) and F(2d) (or the slope, when F(d) is not lower) decides
+         * how far to go along d. */
+        double t = 1.0, F2 = HUGE_VAL;
+        if (Ft < F0) {
+            double d2[3] = {2 * d[0], 2 * d[1], 2 * d[2]};
+            clip_step(n, u, d2, lb, ub);
+            double u2[3] = {u[0] + d2[0], u[1] + d2[1], u[2] + d2[2]}, f2 = 0;
+            rc = stage_residual(c, u2, r1, &f2);
+            if (rc) break;
+            F2 = f2 * prior_factor(c, ps, u2);
+            F2 *= F2;
+            /* parabola through t = 0, 1, 2 */
+            double a2 = 0.5 * (F2 - 2 * Ft + F0), a1 = Ft - F0 - a2;
+            t = a2 > 0 ? -a1 / (2 * a2) : 2.0;
+            t = t > 4.0 ? 4.0 : t < 0.25 ? 0.25 : t;
+            if (F2 < Ft && !(a2 > 0 && fabs(t - 2) > 0.25)) {
+                /* F(2d) is the best point so far and the parabola says
+                 * little more: take it. */
+                sasnav_cfloat *sw = rt;
+                rt = r1;
+                r1 = sw;
+                Ft = F2;
+                ft = f2;
+                dmax = 0;
+                for (int k = 0; k < n; k++) {
+                    d[k] = d2[k];
+                    ut[k] = u2[k];
+                    dmax = fabs(d[k]) > dmax ? fabs(d[k]) : dmax;
+                }
+                t = 1.0;
+            } else if (F2 < Ft) {
+                sasnav_cfloat *sw = rt;
+                rt = r1;
+                r1 = sw;
+                Ft = F2;
+                ft = f2;
+                for (int k = 0; k < n; k++) {
+                    d[k] = d2[k];
+                    ut[k] = u2[k];
+                }
+                t = t / 2; /* relative to the new d */
+            }
+        } else if (!(Ft < F0)) {
+            double curv = Ft - F0 - slope;
+            t = curv > 0 ? -slope / (2 * curv) : 0.5;
+        }
+        if (fabs(t - 1.0) > 0.2 && t > 0.05) {
+            double dt[3] = {t * d[0], t * d[1], t * d[2]};
+            clip_step(n, u, dt, lb, ub);
+            double uq[3] = {u[0] + dt[0], u[1] + dt[1], u[2] + dt[2]}, fq = 0;
+            rc = stage_residual(c, uq, r1, &fq);
+            if (rc) break;
+            double Fq = fq * prior_factor(c, ps, uq);
+            Fq *= Fq;
+            if (Fq < Ft) {
+                sasnav_cfloat *sw = rt;
+                rt = r1;
+                r1 = sw;
+                Ft = Fq;
+                ft = fq;
+                for (int k = 0; k < n; k++) {
+                    d[k] = dt[k];
+                    ut[k] = uq[k];
+                }
+            }
+        }
+        dmax = 0;
+        for (int k = 0; k < n; k++) dmax = fabs(d[k]) > dmax ? fabs(d[k]) : dmax;
+        if (Ft < F0) {
+            /* Broyden update J += (r_t - r0 - J d) d^T / |d|^2, then move. */
+            double dd = 0;
+            for (int k = 0; k < n; k++) dd += d[k] * d[k];
+            for (size_t j = 0; j < np; j++) {
+                sasnav_cfloat jd = 0;
+                for (int k = 0; k < n; k++) jd += J[k][j] * (float)d[k];
+                sasnav_cfloat e = rt[j] - r0[j] - jd;
+                for (int k = 0; k < n; k++) J[k][j] += e * (float)(d[k] / dd);
+            }
+            sasnav_cfloat *sw = r0;
+            r0 = rt;
+            rt = sw;
+            for (int k = 0; k < n; k++) u[k] = ut[k];
+            f0 = ft;
+            fresh = 0;
+            rejects = 0;
+            mu = mu / 3 > 1e-6 ? mu / 3 : 1e-6;
+            if (dmax < xtol) break;
+        } else {
+            if (++rejects > 4) break;
+            if (fresh) {
+                if (dmax < xtol) break; /* even a short step fails: at the minimum */
+                mu *= 4;
+            } else {
+                have_j = 0; /* the carried Jacobian misled: a fresh one at u */
+            }
+        }
+    }
+    free(buf);
+    if (rc) return rc;
+    *best = from_unit(c, u);
+    *fbest = f0 * prior_factor(c, ps, u);
+    return c->evals >= max_evals ? SASNAV_ERR_NOT_CONVERGED : SASNAV_OK;
+}
+
+/* Newton stage on f^2 (f = eta at the context's level) from `start`, with
+ * the full local quadratic model measured from residual vectors (units of
+ * `unit`): r at start, start +- h e_k and start + h (e_k + e_m), 1 + 2n +
+ * n(n-1)/2 evaluations (10 in 3-D), give the central-difference Jacobian J
+ * and the second derivatives of r, hence the gradient 2 Re(J^H r) and the
+ * whole Hessian 2 Re(J^H J + r^H d2r): the second-order part is what a
+ * Gauss-Newton model leaves out, and it is large here (eta ~0.3 at the
+ * minimum; without it the steps along the flat surge-yaw valley fall 40 %
+ * short each time, docs/estimator.md). Then one evaluation at the Newton
+ * step (and one at half of it if the full step is not lower). When that
+ * step was longer than `far` units a new model is measured there (up to
+ * `rounds` models); otherwise, when it was longer than half a unit, one
+ * correction with the same Hessian and a forward-difference gradient (n + 1
+ * evaluations). 15 evaluations in all on most pairs. */
+static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, double h, double far,
+                        int rounds, sasnav_pose *best, double *fbest)
+{
+    const sasnav_pair_opts *o = sasnav_pair_options(c->pr);
+    const int n = o->fix_yaw ? 2 : 3;
+    const size_t np = pair_level_points(c->pr, c->level);
+    const int nv = 1 + 2 * n + n * (n - 1) / 2;
+    c->evals = 0;
+    c->rc = 0;
+    c->ndim = n;
+    c->scale = unit;
+    sasnav_cfloat *buf = malloc(sizeof(sasnav_cfloat) * np * (size_t)nv);
+    if (!buf) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the local search");
+    sasnav_pose at = start;
+    double f0 = HUGE_VAL;
+    int rc = SASNAV_OK;
+    for (int round = 0; round < rounds && !rc; round++) {
+        c->centre = at;
+        sasnav_cfloat *r0 = buf, *rp[3], *rm[3], *rx[3];
+        double u[3] = {0, 0, 0}, f;
+        rc = stage_residual(c, u, r0, &f0);
+        int idx = 1;
+        for (int k = 0; k < n && !rc; k++) {
+            double up[3] = {0, 0, 0}, um[3] = {0, 0, 0};
+            up[k] = h;
+            um[k] = -h;
+            rp[k] = buf + np * (size_t)idx++;
+            rm[k] = buf + np * (size_t)idx++;
+            rc = stage_residual(c, up, rp[k], &f);
+            if (!rc) rc = stage_residual(c, um, rm[k], &f);
+        }
+        static const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+        int npair = n * (n - 1) / 2;
+        for (int q = 0; q < npair && !rc; q++) {
+            double uu[3] = {0, 0, 0};
+            uu[pairs[q][0]] = h;
+            uu[pairs[q][1]] = h;
+            rx[q] = buf + np * (size_t)idx++;
+            rc = stage_residual(c, uu, rx[q], &f);
+        }
+        if (rc) break;
+        /* Model: J_k = (r+k - r-k) / 2h; r_kk = (r+k - 2 r0 + r-k) / h^2;
+         * r_km = (r(h, h) - r+k - r+m + r0) / h^2 (first order). */
+        double H[3][3] = {{0}}, G[3] = {0};
+        double ih2 = 1.0 / (h * h), i2h = 0.5 / h;
+        for (int k = 0; k < n; k++) {
+            double gk = 0, skk = 0;
+            for (size_t j = 0; j < np; j++) {
+                sasnav_cfloat jk = (rp[k][j] - rm[k][j]) * (float)i2h;
+                sasnav_cfloat dk = (rp[k][j] - 2.0f * r0[j] + rm[k][j]) * (float)ih2;
+                gk += (double)crealf(jk) * crealf(r0[j]) + (double)cimagf(jk) * cimagf(r0[j]);
+                skk += (double)crealf(r0[j]) * crealf(dk) + (double)cimagf(r0[j]) * cimagf(dk);
+            }
+            G[k] = 2 * gk;
+            H[k][k] = 2 * skk;
+        }
+        for (int q = 0; q < npair; q++) {
+            int k = pairs[q][0], m = pairs[q][1];
+            double s = 0;
+            for (size_t j = 0; j < np; j++) {
+                sasnav_cfloat d2 = (rx[q][j] - rp[k][j] - rp[m][j] + r0[j]) * (float)ih2;
+                s += (double)crealf(r0[j]) * crealf(d2) + (double)cimagf(r0[j]) * cimagf(d2);
+            }
+            H[k][m] = H[m][k] = 2 * s;
+        }
+        for (int k = 0; k < n; k++)
+            for (int m = 0; m <= k; m++) {
+                double a = 0;
+                for (size_t j = 0; j < np; j++) {
+                    sasnav_cfloat jk = (rp[k][j] - rm[k][j]) * (float)i2h;
+                    sasnav_cfloat jm = (rp[m][j] - rm[m][j]) * (float)i2h;
+                    a += (double)crealf(jk) * crealf(jm) + (double)cimagf(jk) * cimagf(jm);
+                }
+                H[k][m] += 2 * a;
+                if (m != k) H[m][k] = H[k][m];
+            }
+        /* Newton step; where the model is not convex along it, the
+         * Gauss-Newton step (second-order part dropped) with the same
+         * gradient. */
+        double d[3] = {0, 0, 0}, mb[3] = {-G[0], -G[1], -G[2]}, slope = 0;
+        int ok = solve_small(n, H, mb, d);
+        for (int k = 0; k < n; k++) slope += G[k] * d[k];
+        if (!ok || !(slope < 0)) {
+            double A[3][3];
+            for (int k = 0; k < n; k++)
+                for (int m = 0; m < n; m++) {
+                    double a = 0;
+                    for (size_t j = 0; j < np; j++) {
+                        sasnav_cfloat jk = (rp[k][j] - rm[k][j]) * (float)i2h;
+                        sasnav_cfloat jm = (rp[m][j] - rm[m][j]) * (float)i2h;
+                        a += (double)crealf(jk) * crealf(jm) + (double)cimagf(jk) * cimagf(jm);
+                    }
+                    A[k][m] = 2 * a;
+                }
+            ok = solve_small(n, A, mb, d);
+            slope = 0;
+            for (int k = 0; k < n; k++) slope += G[k] * d[k];
+            if (!ok || !(slope < 0)) break;
+        }
+        /* At most `far` units per round... but never beyond the box of the
+         * stage (10 units) in total. */
+        double dmax = 0;
+        for (int k = 0; k < n; k++) dmax = fabs(d[k]) > dmax ? fabs(d[k]) : dmax;
+        double lb[3] = {-10, -10, -10}, ub[3] = {10, 10, 10};
+        clip_step(n, u, d, lb, ub);
+        int moved = 0;
+        for (int half = 0; half < 2 && !rc; half++) {
+            double ft;
+            sasnav_pose e = from_unit(c, d);
+            rc = sasnav_pair_eval(c->pr, e, c->level, 0, NULL, &ft, NULL);
+            c->evals++;
+            if (rc) break;
+            if (ft < f0) {
+                at = e;
+                f0 = ft;
+                moved = 1;
+                break;
+            }
+            for (int k = 0; k < 3; k++) d[k] *= 0.5;
+        }
+        if (!moved) break;
+        if (dmax > far) continue; /* a long step: a new model there */
+        /* A correction with the same Hessian: the gradient at the new
+         * point from forward differences of f^2 (n evaluations; the known
+         * curvature removes their first-order bias), one step, one
+         * evaluation. The first model is fitted over +-h around a start up
+         * to ~2 mm away: its step alone stopped up to 0.2 mm short of the
+         * minimum on some draws (docs/estimator.md). */
+        if (dmax > 0.5) {
+            double F0 = f0 * f0, g[3] = {0, 0, 0}, dc[3] = {0, 0, 0};
+            double uc[3] = {0, 0, 0};
+            c->centre = at;
+            for (int k = 0; k < n && !rc; k++) {
+                double uk[3] = {0, 0, 0}, fk;
+                uk[k] = h;
+                rc = sasnav_pair_eval(c->pr, from_unit(c, uk), c->level, 0, NULL, &fk, NULL);
+                c->evals++;
+                g[k] = (fk * fk - F0) / h - 0.5 * h * H[k][k];
+            }
+            if (rc) break;
+            double mg[3] = {-g[0], -g[1], -g[2]}, sl = 0;
+            if (solve_small(n, H, mg, dc)) {
+                for (int k = 0; k < n; k++) sl += g[k] * dc[k];
+                clip_step(n, uc, dc, lb, ub);
+                if (sl < 0) {
+                    double ft;
+                    sasnav_pose e = from_unit(c, dc);
+                    rc = sasnav_pair_eval(c->pr, e, c->level, 0, NULL, &ft, NULL);
+                    c->evals++;
+                    if (!rc && ft < f0) {
+                        at = e;
+                        f0 = ft;
+                    }
+                }
+            }
+        }
+        break;
+    }
+    free(buf);
+    if (rc) return rc;
+    *best = at;
+    *fbest = f0;
+    return SASNAV_OK;
+}
+
 /* Global stage (docs/estimator.md). The moduli of p's and q's images are
  * alike up to a shift of the scene content: a cross-correlation at the
  * prior measures it, and for any candidate yaw the shift fixes the
@@ -136,6 +593,7 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     double zy = lv->grid.y0 + 0.5 * (lv->grid.ny - 1) * lv->grid.dy;
     int n = 0, rc;
     sasnav_pose hyp = c;
+    (void)0;
     double sx = 0, sy = 0;
     /* Two correlation passes: the second, at the first pass's point of the
      * valley with the prior yaw, removes most of the distortion of the
@@ -244,8 +702,8 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     /* Local refinement of zeta at level 0 around the best valley point. */
     stage_ctx ctx = {.pr = pr, .level = 0, .use_prior = 1};
     sasnav_pose unit = {pc_spacing, pc_spacing, pc_spacing / o->range};
-    sasnav_pose refined;
-    double fr;
+    sasnav_pose refined = arg;
+    double fr = HUGE_VAL;
     /* Bounds: 2 units in sway, half a unit along surge and yaw so that the
      * refinement stays with the chosen candidate of the valley. */
     sasnav_pose hw = {o->fix_yaw ? sstep / pc_spacing : 0.5, 2.0, 0.5};
@@ -260,16 +718,21 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
 typedef struct {
     sasnav_pose zeta_stage, error;
     double zeta, eta;
-    int evaluations_zeta, evaluations_eta, zrc, erc;
+    int evaluations_zeta, evaluations_eta, evaluations_final, zrc, erc;
+    double seconds_zeta, seconds_eta, seconds_final;
+    long applications_zeta, applications_eta, applications_final;
 } refine_out;
 
-/* Stages 1 and 2 from `start` (a global-stage candidate). */
+/* Stage 1 and the level-1 part of stage 2 from `start` (a global-stage
+ * candidate). */
 static int refine(sasnav_pair *pr, sasnav_pose start, double pc_spacing, refine_out *out)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
     double lambda = sasnav_wavelength(&pr->sys), range = o->range;
     int rc;
     memset(out, 0, sizeof *out);
+    double t = sasnav_now_seconds();
+    long apps = sasnav_pair_applications(pr);
     /* Zeta stage (level 1: full pixels, coarse iterations): steps of a
      * fifth of a phase-centre spacing in surge and sway, and the yaw that
      * moves the scene by as much at the grid's range. */
@@ -280,20 +743,25 @@ static int refine(sasnav_pair *pr, sasnav_pose start, double pc_spacing, refine_
     sasnav_pose zstep = {0.2 * pc_spacing, 0.2 * pc_spacing, 0.2 * pc_spacing / range};
     sasnav_pose zbest;
     double zval;
-    int zrc = local_stage(&ctx, start, zstep, HW10, 0.01, o->max_evaluations, &zbest, &zval);
+    int zrc = lm_stage(&ctx, start, zstep, HW10, 0.05, o->max_evaluations, &zbest, &zval);
     out->evaluations_zeta = ctx.evals;
     out->zrc = zrc;
     if (zrc && zrc != SASNAV_ERR_NOT_CONVERGED) return zrc;
     out->zeta_stage = zbest;
     zval /= surge_prior(pr, zbest); /* the data's zeta (factor 1 without a prior) */
     out->zeta = zval;
+    out->seconds_zeta = sasnav_now_seconds() - t;
+    out->applications_zeta = sasnav_pair_applications(pr) - apps;
+    t = sasnav_now_seconds();
+    apps = sasnav_pair_applications(pr);
 
-    /* Eta stage, first at level 1 then at level 2 (final k, i): steps of
+    /* Eta stage, first at level 1 then at level 2 (final k, i): units of
      * lambda/40 in sway (bounds +-lambda/4: one fringe), a 25th of the
      * phase-centre spacing in surge and twice the matching yaw (bounds +-10
-     * steps). The fringes either side of the zeta result are tried too and
+     * units). The fringes either side of the zeta result are tried too and
      * kept when eta is lower there. */
     ctx.use_eta = 1;
+    ctx.use_prior = 0;
     sasnav_pose estep = {pc_spacing / 25.0, lambda / 40.0, 2.0 * pc_spacing / 25.0 / range};
     sasnav_pose best = zbest;
     double fbest = HUGE_VAL;
@@ -308,9 +776,11 @@ static int refine(sasnav_pair *pr, sasnav_pose start, double pc_spacing, refine_
             if (rc) return rc;
             if (!(e0 < fbest)) continue;
         }
-        sasnav_pose b;
-        double f;
-        int r = local_stage(&ctx, s0, estep, HW10, 0.01, o->max_evaluations, &b, &f);
+        sasnav_pose b = s0;
+        double f = HUGE_VAL;
+        /* 0.05 units (50 microns of surge, 6 of sway): level 2 moves the
+         * estimate further than that anyway. */
+        int r = lm_stage(&ctx, s0, estep, HW10, 0.05, o->max_evaluations, &b, &f);
         nevals += ctx.evals;
         if (r && r != SASNAV_ERR_NOT_CONVERGED) return r;
         if (f < fbest) {
@@ -319,24 +789,37 @@ static int refine(sasnav_pair *pr, sasnav_pose start, double pc_spacing, refine_
             erc = r;
         }
     }
-    if (o->k != o->coarse_k || o->i != o->coarse_i) {
-        ctx.level = 2;
-        /* Half the eta steps; stop at 0.05 step (25 microns of surge, 3
-         * microns of sway): tighter costs up to 2x the applications for
-         * changes well inside the bias (docs/estimator.md). */
-        sasnav_pose fstep = {estep.x / 2, estep.y / 2, estep.theta / 2};
-        sasnav_pose b;
-        double f;
-        erc = local_stage(&ctx, best, fstep, HW10, 0.05, o->max_evaluations, &b, &f);
-        nevals += ctx.evals;
-        if (erc && erc != SASNAV_ERR_NOT_CONVERGED) return erc;
-        best = b;
-        fbest = f;
-    }
+    out->seconds_eta = sasnav_now_seconds() - t;
+    out->applications_eta = sasnav_pair_applications(pr) - apps;
     out->evaluations_eta = nevals;
     out->eta = fbest;
     out->error = best;
     out->erc = erc;
+    return SASNAV_OK;
+}
+
+/* The final stage at level 2 (k, i) from the level-1 eta result in `out`:
+ * Newton steps on the measured quadratic model, in half the eta units,
+ * differences of half a unit (0.25 mm of surge, 31 microns of sway, 5e-5
+ * rad); a new model when a step is longer than 4 units (2 mm of surge). */
+static int refine_final(sasnav_pair *pr, double pc_spacing, refine_out *out)
+{
+    const sasnav_pair_opts *o = sasnav_pair_options(pr);
+    if (o->k == o->coarse_k && o->i == o->coarse_i) return SASNAV_OK;
+    double lambda = sasnav_wavelength(&pr->sys), t = sasnav_now_seconds();
+    long apps = sasnav_pair_applications(pr);
+    stage_ctx ctx = {.pr = pr, .level = 2, .use_eta = 1};
+    sasnav_pose fstep = {pc_spacing / 50.0, lambda / 80.0, pc_spacing / 25.0 / o->range};
+    sasnav_pose b = out->error;
+    double f = out->eta;
+    int rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, &b, &f);
+    out->evaluations_eta += ctx.evals;
+    out->evaluations_final = ctx.evals;
+    if (rc) return rc;
+    out->error = b;
+    out->eta = f;
+    out->seconds_final = sasnav_now_seconds() - t;
+    out->applications_final = sasnav_pair_applications(pr) - apps;
     return SASNAV_OK;
 }
 
@@ -373,27 +856,51 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     }
     res->global_stage = start;
     res->evaluations_global = nglob;
+    res->seconds_global = sasnav_now_seconds() - t0;
+    res->applications_global = pr->applications - apps0;
 
     refine_out r1, r2;
     rc = refine(pr, start, pc_spacing, &r1);
     if (rc) return rc;
     int nzeta = r1.evaluations_zeta, neta = r1.evaluations_eta;
+    refine_out sum = r1;
     /* When the scan's two best candidates are nearly alike in zeta, both are
-     * carried through the eta stage and the lower final eta decides: at the
-     * tank's track ends zeta prefers the candidate one phase-centre spacing
-     * short (one more shared phase centre) while eta there is 3-6x higher
-     * than at the right one (docs/estimator.md). */
+     * carried through the zeta and level-1 eta stages and the lower eta
+     * decides; only the winner goes on to the final stage. At the tank's
+     * track ends zeta prefers the candidate one phase-centre spacing short
+     * (one more shared phase centre) while eta there is 3-6x higher than at
+     * the right one (docs/estimator.md). */
     if (has_second && res->ambiguity > AMBIGUOUS) {
         rc = refine(pr, second, pc_spacing, &r2);
         if (rc) return rc;
         nzeta += r2.evaluations_zeta;
         neta += r2.evaluations_eta;
+        sum.evaluations_final += r2.evaluations_final;
+        sum.seconds_zeta += r2.seconds_zeta;
+        sum.seconds_eta += r2.seconds_eta;
+        sum.seconds_final += r2.seconds_final;
+        sum.applications_zeta += r2.applications_zeta;
+        sum.applications_eta += r2.applications_eta;
+        sum.applications_final += r2.applications_final;
         if (r2.eta < r1.eta) {
             r1 = r2;
             res->global_stage = second;
         }
     }
+    rc = refine_final(pr, pc_spacing, &r1);
+    if (rc) return rc;
+    neta += r1.evaluations_final;
+    sum.evaluations_final += r1.evaluations_final;
+    sum.seconds_final += r1.seconds_final;
+    sum.applications_final += r1.applications_final;
     res->evaluations_zeta = nzeta;
+    res->evaluations_final = sum.evaluations_final;
+    res->seconds_zeta = sum.seconds_zeta;
+    res->seconds_eta = sum.seconds_eta;
+    res->seconds_final = sum.seconds_final;
+    res->applications_zeta = sum.applications_zeta;
+    res->applications_eta = sum.applications_eta;
+    res->applications_final = sum.applications_final;
     res->zeta_stage = r1.zeta_stage;
     res->zeta = r1.zeta;
     res->evaluations_eta = neta;

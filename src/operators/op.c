@@ -65,7 +65,7 @@
  * may differ in the last bits (FMA contraction), never with the thread count. */
 #ifndef HOT_LOOP /* -DHOT_LOOP= builds the baseline version only (tests) */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__AVX2__)
-#define HOT_LOOP __attribute__((target_clones("arch=x86-64-v3", "default")))
+#define HOT_LOOP __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 #define HOT_LOOP
 #endif

@@ -6,6 +6,8 @@
 #include "core/clock.h"
 
 #include <math.h>
+#include <omp.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -77,13 +79,15 @@ static int fatal_code(int rc)
 typedef struct {
     const sasnav_run *run;
     const sasnav_navigate_opts *opts;
-    sasnav_pair *estimator; /* subspace: one object, reused for every pair */
+    sasnav_pair **estimators; /* subspace: one per worker thread, reused */
+    int n_workers;            /* threads over pairs (1: the operators use the threads) */
     double t0;
 } nav_ctx;
 
 /* Estimates pair (p, q) into *np. Returns a fatal code, else SASNAV_OK
  * with np->status telling how the pair went. */
-static int estimate_pair(nav_ctx *ctx, int p, int q, sasnav_navigate_pair *np)
+static int estimate_pair(nav_ctx *ctx, sasnav_pair *estimator, int p, int q,
+                         sasnav_navigate_pair *np)
 {
     const sasnav_run *run = ctx->run;
     memset(np, 0, sizeof *np);
@@ -101,9 +105,9 @@ static int estimate_pair(nav_ctx *ctx, int p, int q, sasnav_navigate_pair *np)
         rc = sasnav_dpca_estimate(run, p, q, &o, &np->result, NULL);
     } else {
         double t = sasnav_now_seconds();
-        rc = sasnav_pair_set_data(ctx->estimator, sasnav_run_ping(run, p), sasnav_run_ping(run, q),
+        rc = sasnav_pair_set_data(estimator, sasnav_run_ping(run, p), sasnav_run_ping(run, q),
                                   np->nominal);
-        if (!rc) rc = sasnav_pair_estimate(ctx->estimator, &np->result);
+        if (!rc) rc = sasnav_pair_estimate(estimator, &np->result);
         if (rc) np->result.seconds = sasnav_now_seconds() - t;
     }
     if (fatal_code(rc)) return rc;
@@ -177,18 +181,67 @@ static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
         free(use_long);
         return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     }
+    /* The pairs in their output order: consecutive pairs, then the long
+     * baselines. */
+    int *pq = malloc(sizeof(int) * 2 * (size_t)total);
+    int *codes = calloc((size_t)total, sizeof(int));
+    char (*messages)[256] = calloc((size_t)total, sizeof *messages);
+    if (!pq || !codes || !messages) {
+        free(pq);
+        free(codes);
+        free(messages);
+        free(use_long);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    }
+    int k = 0;
+    for (int p = 0; p + 1 < n; p++, k++) {
+        pq[2 * k] = p;
+        pq[2 * k + 1] = p + 1;
+    }
+    for (int p = 0; p < n_long; p++)
+        if (use_long[p]) {
+            pq[2 * k] = p;
+            pq[2 * k + 1] = p + 2;
+            k++;
+        }
     report(ctx, 0, total, NULL);
-    int k = 0, rc = SASNAV_OK;
-    for (int p = 0; p + 1 < n && !rc; p++, k++) {
-        rc = estimate_pair(ctx, p, p + 1, &out->pairs[k]);
-        if (!rc) report(ctx, k + 1, total, &out->pairs[k]);
+    double t_est = sasnav_now_seconds();
+    /* Independent pairs run concurrently, one estimator per thread; each
+     * pair's result depends on its own data only (the operators sum in a
+     * fixed order whatever their thread count), so the output is the same
+     * bits whatever the number of threads. A fatal error stops the
+     * remaining pairs. */
+    int done = 0, stop = 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(ctx->n_workers) if (ctx->n_workers > 1)
+    for (int j = 0; j < total; j++) {
+        int skip;
+#pragma omp atomic read
+        skip = stop;
+        if (skip) continue;
+        int t = ctx->n_workers > 1 ? omp_get_thread_num() : 0;
+        int rc = estimate_pair(ctx, ctx->estimators ? ctx->estimators[t] : NULL, pq[2 * j],
+                               pq[2 * j + 1], &out->pairs[j]);
+        codes[j] = rc;
+        if (rc) {
+            snprintf(messages[j], sizeof messages[j], "%s", sasnav_last_error());
+#pragma omp atomic write
+            stop = 1;
+        } else {
+#pragma omp critical(sasnav_navigate_progress)
+            {
+                done++;
+                report(ctx, done, total, &out->pairs[j]);
+            }
+        }
     }
-    for (int p = 0; p < n_long && !rc; p++) {
-        if (!use_long[p]) continue;
-        rc = estimate_pair(ctx, p, p + 2, &out->pairs[k]);
-        if (!rc) report(ctx, k + 1, total, &out->pairs[k]);
-        k++;
-    }
+    out->seconds_estimation = sasnav_now_seconds() - t_est;
+    out->pairs_per_second = out->seconds_estimation > 0 ? total / out->seconds_estimation : 0.0;
+    int rc = SASNAV_OK;
+    for (int j = 0; j < total && !rc; j++)
+        if (codes[j]) rc = sasnav_set_error(codes[j], "%s", messages[j]);
+    free(pq);
+    free(codes);
+    free(messages);
     free(use_long);
     out->n_pairs = k;
     for (int j = 0; j < k; j++) {
@@ -317,19 +370,36 @@ int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
     }
     int rc = check_input(run, opts);
     if (rc) return rc;
-    nav_ctx ctx = {run, opts, NULL, sasnav_now_seconds()};
+    nav_ctx ctx = {run, opts, NULL, 1, sasnav_now_seconds()};
     out->method = opts->method;
     out->n_pings = run->n_pings;
+    /* Threads: over pairs when there are several pairs (one estimator, or
+     * DPCA, per thread, their operators on one thread each); with one
+     * thread or one pair, inside the operators. */
+    int threads = opts->nthreads > 0 ? opts->nthreads : omp_get_max_threads();
+    int n_pairs_max = 2 * run->n_pings;
+    ctx.n_workers = threads < n_pairs_max ? threads : n_pairs_max;
+    if (ctx.n_workers < 1 || run->n_pings < 3) ctx.n_workers = 1;
+    out->threads_over_pairs = ctx.n_workers;
+    sasnav_navigate_opts inner = *opts;
+    if (ctx.n_workers > 1) {
+        inner.nthreads = 1;
+        ctx.opts = &inner;
+    }
     if (opts->method == SASNAV_METHOD_SUBSPACE) {
         sasnav_pair_opts po = opts->pair;
         po.range = run->range_of_interest;
         po.tx_lag = run->tx_lag;
-        po.nthreads = opts->nthreads;
-        rc = sasnav_pair_create(&run->sys, &run->array, &run->win, &po, &ctx.estimator);
-        if (rc) return rc;
+        po.nthreads = ctx.n_workers > 1 ? 1 : opts->nthreads;
+        ctx.estimators = calloc((size_t)ctx.n_workers, sizeof *ctx.estimators);
+        if (!ctx.estimators) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        for (int t = 0; t < ctx.n_workers && !rc; t++)
+            rc = sasnav_pair_create(&run->sys, &run->array, &run->win, &po, &ctx.estimators[t]);
     }
-    rc = navigate(&ctx, out);
-    sasnav_pair_destroy(ctx.estimator);
+    if (!rc) rc = navigate(&ctx, out);
+    if (ctx.estimators)
+        for (int t = 0; t < ctx.n_workers; t++) sasnav_pair_destroy(ctx.estimators[t]);
+    free(ctx.estimators);
     out->seconds = sasnav_now_seconds() - ctx.t0;
     if (rc) {
         /* Keep the message of the failure across the frees. */

@@ -1,0 +1,110 @@
+/* Throughput and accuracy of `sasnav navigate` (subspace estimator) on
+ * paper-trajectory runs (16 pings, 15 pairs).
+ *
+ * usage: bench_navigate [--seeds S0 N] [--snr DB|inf] [--threads T1,T2,...]
+ *
+ * For each of N seeds from S0 (the `sasnav simulate --seed` convention:
+ * scene 3s+1, trajectory 3s+2, noise 3s+3), simulates the run once and
+ * navigates it once per thread count (default 1 and 2). Prints per run and
+ * thread count: wall time of the pair estimates, pairs per second, seconds
+ * per pair, how many pairs ran at a time, the final cumulative sway error
+ * (the paper's figure of merit, bound lambda/25) and whether the pair
+ * estimates are bit-identical to those of the first thread count. Then the
+ * peak resident memory (ru_maxrss). */
+#include "sasnav/error.h"
+#include "sasnav/navigate.h"
+#include "sasnav/sim.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+
+#define MAX_T 8
+
+static int same_pairs(const sasnav_navigation *a, const sasnav_navigation *b)
+{
+    if (a->n_pairs != b->n_pairs) return 0;
+    for (int j = 0; j < a->n_pairs; j++) {
+        const sasnav_pair_result *x = &a->pairs[j].result, *y = &b->pairs[j].result;
+        if (memcmp(&x->error, &y->error, sizeof x->error) || x->eta != y->eta || x->zeta != y->zeta ||
+            a->pairs[j].status != b->pairs[j].status)
+            return 0;
+    }
+    return 1;
+}
+
+int main(int argc, char **argv)
+{
+    long s0 = 101, ns = 1;
+    double snr = 30.0;
+    int threads[MAX_T] = {1, 2}, nt = 2;
+    for (int a = 1; a < argc; a++) {
+        if (!strcmp(argv[a], "--seeds") && a + 2 < argc) {
+            s0 = atol(argv[++a]);
+            ns = atol(argv[++a]);
+        } else if (!strcmp(argv[a], "--snr") && a + 1 < argc) {
+            a++;
+            snr = !strcmp(argv[a], "inf") ? INFINITY : atof(argv[a]);
+        } else if (!strcmp(argv[a], "--threads") && a + 1 < argc) {
+            nt = 0;
+            for (char *p = argv[++a]; *p && nt < MAX_T;) {
+                threads[nt++] = (int)strtol(p, &p, 10);
+                if (*p == ',') p++;
+            }
+        } else {
+            fprintf(stderr, "usage: bench_navigate [--seeds S0 N] [--snr DB|inf] [--threads T1,T2,...]\n");
+            return 2;
+        }
+    }
+    if (ns < 1 || nt < 1) return 2;
+    const double lambda = 1500.0 / 300e3;
+    printf("paper-trajectory, SNR %g dB, seeds %ld..%ld\n", snr, s0, s0 + ns - 1);
+    printf("%6s %8s %10s %10s %10s %8s %14s %10s\n", "seed", "threads", "pairs_s", "pairs/s", "s/pair",
+           "at once", "final sway mm", "identical");
+    int bad = 0;
+    for (long s = s0; s < s0 + ns; s++) {
+        sasnav_scenario sc;
+        sasnav_scenario_preset("paper-trajectory", &sc);
+        sc.snr_db = snr;
+        sc.ripples.seed = (uint64_t)s * 3 + 1;
+        sc.traj.seed = (uint64_t)s * 3 + 2;
+        sc.noise_seed = (uint64_t)s * 3 + 3;
+        sasnav_run *run = NULL;
+        if (sasnav_simulate(&sc, NULL, NULL, &run)) {
+            fprintf(stderr, "simulate: %s\n", sasnav_last_error());
+            return 1;
+        }
+        sasnav_navigation first;
+        memset(&first, 0, sizeof first);
+        for (int t = 0; t < nt; t++) {
+            sasnav_navigate_opts no;
+            sasnav_navigate_default_opts(&no);
+            no.nthreads = threads[t];
+            sasnav_navigation nav;
+            if (sasnav_navigate(run, &no, &nav)) {
+                fprintf(stderr, "navigate: %s\n", sasnav_last_error());
+                sasnav_run_free(run);
+                return 1;
+            }
+            double sway = nav.has_truth ? nav.cumulative[nav.n_pings - 1].y : NAN;
+            int same = t == 0 ? 1 : same_pairs(&first, &nav);
+            bad += !same;
+            printf("%6ld %8d %10.2f %10.3f %10.3f %8d %+14.4f %10s%s\n", s, threads[t],
+                   nav.seconds_estimation, nav.pairs_per_second, nav.seconds_per_pair,
+                   nav.threads_over_pairs, 1e3 * sway, t == 0 ? "-" : same ? "yes" : "NO",
+                   fabs(sway) > lambda / 25 ? "  (over lambda/25)" : "");
+            fflush(stdout);
+            if (t == 0) first = nav;
+            else sasnav_navigation_free(&nav);
+        }
+        sasnav_navigation_free(&first);
+        sasnav_run_free(run);
+    }
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    printf("peak memory %.1f MiB; runs whose pair estimates changed with the thread count: %d\n",
+           ru.ru_maxrss / 1024.0, bad);
+    return bad ? 1 : 0;
+}
