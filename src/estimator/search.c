@@ -385,182 +385,175 @@ static int lm_stage(stage_ctx *c, sasnav_pose start, sasnav_pose step, sasnav_po
     return c->evals >= max_evals ? SASNAV_ERR_NOT_CONVERGED : SASNAV_OK;
 }
 
-/* Newton stage on f^2 (f = eta at the context's level) from `start`, with
- * the full local quadratic model measured from residual vectors (units of
- * `unit`): r at start, start +- h e_k and start + h (e_k + e_m), 1 + 2n +
- * n(n-1)/2 evaluations (10 in 3-D), give the central-difference Jacobian J
- * and the second derivatives of r, hence the gradient 2 Re(J^H r) and the
- * whole Hessian 2 Re(J^H J + r^H d2r): the second-order part is what a
- * Gauss-Newton model leaves out, and it is large here (eta ~0.3 at the
- * minimum; without it the steps along the flat surge-yaw valley fall 40 %
- * short each time, docs/estimator.md). Then one evaluation at the Newton
- * step (and one at half of it if the full step is not lower). When that
- * step was longer than `far` units a new model is measured there (up to
- * `rounds` models); otherwise, when it was longer than half a unit, one
- * correction with the same Hessian and a forward-difference gradient (n + 1
- * evaluations). 15 evaluations in all on most pairs. */
+/* Re sum conj(a) b (double accumulation). */
+static double redot(const sasnav_cfloat *a, const sasnav_cfloat *b, size_t n)
+{
+    double s = 0;
+    for (size_t j = 0; j < n; j++)
+        s += (double)crealf(a[j]) * crealf(b[j]) + (double)cimagf(a[j]) * cimagf(b[j]);
+    return s;
+}
+
+/* Newton stage on f^2 (f = eta at the context's level) from `start`, on a
+ * quadratic model of the residual VECTOR measured around an anchor (units
+ * of `unit`): r at the anchor, anchor +- h e_k and anchor + h (e_k + e_m),
+ * 1 + 2n + n(n-1)/2 evaluations (10 in 3-D), give
+ *   r(u) ~ r0 + J u + 1/2 R[u, u]
+ * with J by central differences and the second derivatives R_kk, R_km.
+ * At a point u of the model, with the true residual r there, the gradient
+ * of f^2 is 2 Re(J(u)^H r) and its Hessian 2 Re(J(u)^H J(u) + r^H R),
+ * J(u) = J + R u: the second-order part is what a Gauss-Newton model leaves
+ * out, and it is large here (eta ~0.3 at the minimum; without it the steps
+ * along the flat surge-yaw valley fall 40 % short each time,
+ * docs/estimator.md). Each Newton step costs one evaluation (its true
+ * residual re-anchors the gradient); steps stop below `xtol` units or after
+ * `max_steps`. When the estimate has moved more than `far` units from the
+ * anchor, the model is measured again there (up to `rounds` models). 12
+ * evaluations on most pairs. */
 static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, double h, double far,
-                        int rounds, sasnav_pose *best, double *fbest)
+                        int rounds, double xtol, int max_steps, sasnav_pose *best, double *fbest)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(c->pr);
     const int n = o->fix_yaw ? 2 : 3;
     const size_t np = pair_level_points(c->pr, c->level);
-    const int nv = 1 + 2 * n + n * (n - 1) / 2;
+    static const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+    const int npair = n * (n - 1) / 2;
+    const int nv = 1 + 2 * n + npair + n + 2; /* model, J(u), r, trial r */
     c->evals = 0;
     c->rc = 0;
     c->ndim = n;
     c->scale = unit;
     sasnav_cfloat *buf = malloc(sizeof(sasnav_cfloat) * np * (size_t)nv);
     if (!buf) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the local search");
+    sasnav_cfloat *r0 = buf, *J[3], *Rd[3], *Rx[3], *Ju[3], *r = buf + np * (size_t)(nv - 2),
+                  *rt = buf + np * (size_t)(nv - 1);
+    for (int k = 0; k < n; k++) {
+        J[k] = buf + np * (size_t)(1 + 2 * k);
+        Rd[k] = buf + np * (size_t)(2 + 2 * k);
+        Ju[k] = buf + np * (size_t)(1 + 2 * n + npair + k);
+    }
+    for (int q = 0; q < npair; q++) Rx[q] = buf + np * (size_t)(1 + 2 * n + q);
     sasnav_pose at = start;
-    double f0 = HUGE_VAL;
+    double fat = HUGE_VAL;
     int rc = SASNAV_OK;
     for (int round = 0; round < rounds && !rc; round++) {
+        /* Measure the model around the anchor `at`. */
         c->centre = at;
-        sasnav_cfloat *r0 = buf, *rp[3], *rm[3], *rx[3];
-        double u[3] = {0, 0, 0}, f;
-        rc = stage_residual(c, u, r0, &f0);
-        int idx = 1;
+        double u0[3] = {0, 0, 0}, f;
+        rc = stage_residual(c, u0, r0, &fat);
         for (int k = 0; k < n && !rc; k++) {
             double up[3] = {0, 0, 0}, um[3] = {0, 0, 0};
             up[k] = h;
             um[k] = -h;
-            rp[k] = buf + np * (size_t)idx++;
-            rm[k] = buf + np * (size_t)idx++;
-            rc = stage_residual(c, up, rp[k], &f);
-            if (!rc) rc = stage_residual(c, um, rm[k], &f);
+            rc = stage_residual(c, up, J[k], &f); /* r(+h e_k), for now */
+            if (!rc) rc = stage_residual(c, um, Rd[k], &f); /* r(-h e_k) */
         }
-        static const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
-        int npair = n * (n - 1) / 2;
         for (int q = 0; q < npair && !rc; q++) {
             double uu[3] = {0, 0, 0};
             uu[pairs[q][0]] = h;
             uu[pairs[q][1]] = h;
-            rx[q] = buf + np * (size_t)idx++;
-            rc = stage_residual(c, uu, rx[q], &f);
+            rc = stage_residual(c, uu, Rx[q], &f);
         }
         if (rc) break;
-        /* Model: J_k = (r+k - r-k) / 2h; r_kk = (r+k - 2 r0 + r-k) / h^2;
-         * r_km = (r(h, h) - r+k - r+m + r0) / h^2 (first order). */
-        double H[3][3] = {{0}}, G[3] = {0};
-        double ih2 = 1.0 / (h * h), i2h = 0.5 / h;
-        for (int k = 0; k < n; k++) {
-            double gk = 0, skk = 0;
-            for (size_t j = 0; j < np; j++) {
-                sasnav_cfloat jk = (rp[k][j] - rm[k][j]) * (float)i2h;
-                sasnav_cfloat dk = (rp[k][j] - 2.0f * r0[j] + rm[k][j]) * (float)ih2;
-                gk += (double)crealf(jk) * crealf(r0[j]) + (double)cimagf(jk) * cimagf(r0[j]);
-                skk += (double)crealf(r0[j]) * crealf(dk) + (double)cimagf(r0[j]) * cimagf(dk);
-            }
-            G[k] = 2 * gk;
-            H[k][k] = 2 * skk;
-        }
+        const float ih2 = (float)(1.0 / (h * h)), i2h = (float)(0.5 / h);
+        /* R_km = (r(h, h) - r(h, 0) - r(0, h) + r0) / h^2, before r(+h e_k)
+         * becomes J_k. */
         for (int q = 0; q < npair; q++) {
             int k = pairs[q][0], m = pairs[q][1];
-            double s = 0;
-            for (size_t j = 0; j < np; j++) {
-                sasnav_cfloat d2 = (rx[q][j] - rp[k][j] - rp[m][j] + r0[j]) * (float)ih2;
-                s += (double)crealf(r0[j]) * crealf(d2) + (double)cimagf(r0[j]) * cimagf(d2);
-            }
-            H[k][m] = H[m][k] = 2 * s;
+            for (size_t j = 0; j < np; j++) Rx[q][j] = (Rx[q][j] - J[k][j] - J[m][j] + r0[j]) * ih2;
         }
         for (int k = 0; k < n; k++)
-            for (int m = 0; m <= k; m++) {
-                double a = 0;
-                for (size_t j = 0; j < np; j++) {
-                    sasnav_cfloat jk = (rp[k][j] - rm[k][j]) * (float)i2h;
-                    sasnav_cfloat jm = (rp[m][j] - rm[m][j]) * (float)i2h;
-                    a += (double)crealf(jk) * crealf(jm) + (double)cimagf(jk) * cimagf(jm);
-                }
-                H[k][m] += 2 * a;
-                if (m != k) H[m][k] = H[k][m];
+            for (size_t j = 0; j < np; j++) {
+                sasnav_cfloat p = J[k][j], m = Rd[k][j];
+                J[k][j] = (p - m) * i2h;
+                Rd[k][j] = (p + m - 2.0f * r0[j]) * ih2;
             }
-        /* Newton step; where the model is not convex along it, the
-         * Gauss-Newton step (second-order part dropped) with the same
-         * gradient. */
-        double d[3] = {0, 0, 0}, mb[3] = {-G[0], -G[1], -G[2]}, slope = 0;
-        int ok = solve_small(n, H, mb, d);
-        for (int k = 0; k < n; k++) slope += G[k] * d[k];
-        if (!ok || !(slope < 0)) {
-            double A[3][3];
+        /* Newton steps on the model from the anchor. */
+        double u[3] = {0, 0, 0}, fu = fat;
+        memcpy(r, r0, sizeof(sasnav_cfloat) * np);
+        int moved_far = 0;
+        for (int step = 0; step < max_steps; step++) {
+            /* J(u) = J + R u */
             for (int k = 0; k < n; k++)
-                for (int m = 0; m < n; m++) {
-                    double a = 0;
-                    for (size_t j = 0; j < np; j++) {
-                        sasnav_cfloat jk = (rp[k][j] - rm[k][j]) * (float)i2h;
-                        sasnav_cfloat jm = (rp[m][j] - rm[m][j]) * (float)i2h;
-                        a += (double)crealf(jk) * crealf(jm) + (double)cimagf(jk) * cimagf(jm);
+                for (size_t j = 0; j < np; j++) {
+                    sasnav_cfloat v = J[k][j] + Rd[k][j] * (float)u[k];
+                    for (int q = 0; q < npair; q++) {
+                        int a = pairs[q][0], b = pairs[q][1];
+                        if (a == k) v += Rx[q][j] * (float)u[b];
+                        else if (b == k) v += Rx[q][j] * (float)u[a];
                     }
-                    A[k][m] = 2 * a;
+                    Ju[k][j] = v;
                 }
-            ok = solve_small(n, A, mb, d);
-            slope = 0;
+            double G[3] = {0, 0, 0}, H[3][3], A[3][3], S[3][3];
+            for (int k = 0; k < n; k++) {
+                G[k] = 2 * redot(Ju[k], r, np);
+                for (int m = 0; m <= k; m++) A[k][m] = A[m][k] = 2 * redot(Ju[k], Ju[m], np);
+                S[k][k] = 2 * redot(r, Rd[k], np);
+            }
+            for (int q = 0; q < npair; q++) {
+                int k = pairs[q][0], m = pairs[q][1];
+                S[k][m] = S[m][k] = 2 * redot(r, Rx[q], np);
+            }
+            for (int k = 0; k < n; k++)
+                for (int m = 0; m < n; m++) H[k][m] = A[k][m] + S[k][m];
+            /* Newton step; where the model is not convex along it, the
+             * Gauss-Newton step (second-order part dropped). */
+            double d[3] = {0, 0, 0}, mb[3] = {-G[0], -G[1], -G[2]}, slope = 0;
+            int ok = solve_small(n, H, mb, d);
             for (int k = 0; k < n; k++) slope += G[k] * d[k];
-            if (!ok || !(slope < 0)) break;
-        }
-        /* At most `far` units per round... but never beyond the box of the
-         * stage (10 units) in total. */
-        double dmax = 0;
-        for (int k = 0; k < n; k++) dmax = fabs(d[k]) > dmax ? fabs(d[k]) : dmax;
-        double lb[3] = {-10, -10, -10}, ub[3] = {10, 10, 10};
-        clip_step(n, u, d, lb, ub);
-        int moved = 0;
-        for (int half = 0; half < 2 && !rc; half++) {
-            double ft;
-            sasnav_pose e = from_unit(c, d);
-            rc = sasnav_pair_eval(c->pr, e, c->level, 0, NULL, &ft, NULL);
-            c->evals++;
-            if (rc) break;
-            if (ft < f0) {
-                at = e;
-                f0 = ft;
-                moved = 1;
+            if (!ok || !(slope < 0)) {
+                ok = solve_small(n, A, mb, d);
+                slope = 0;
+                for (int k = 0; k < n; k++) slope += G[k] * d[k];
+                if (!ok || !(slope < 0)) break;
+            }
+            /* Within the stage's box of +-10 units around `start`. */
+            double lb[3], ub[3], uu[3];
+            for (int k = 0; k < 3; k++) {
+                double off = k == 0 ? (at.x - start.x) / unit.x : k == 1 ? (at.y - start.y) / unit.y
+                                                                         : (at.theta - start.theta) / unit.theta;
+                lb[k] = -10 - off;
+                ub[k] = 10 - off;
+            }
+            clip_step(n, u, d, lb, ub);
+            double dmax = 0;
+            for (int k = 0; k < n; k++) dmax = fabs(d[k]) > dmax ? fabs(d[k]) : dmax;
+            if (dmax < 1e-9) break;
+            int accepted = 0;
+            for (int half = 0; half < 2 && !accepted; half++) {
+                for (int k = 0; k < 3; k++) uu[k] = u[k] + d[k];
+                double ft;
+                rc = stage_residual(c, uu, rt, &ft);
+                if (rc) break;
+                if (ft < fu) {
+                    sasnav_cfloat *sw = r;
+                    r = rt;
+                    rt = sw;
+                    memcpy(u, uu, sizeof u);
+                    fu = ft;
+                    accepted = 1;
+                } else {
+                    for (int k = 0; k < 3; k++) d[k] *= 0.5;
+                    dmax *= 0.5;
+                }
+            }
+            if (rc || !accepted) break;
+            double umax = 0;
+            for (int k = 0; k < n; k++) umax = fabs(u[k]) > umax ? fabs(u[k]) : umax;
+            if (umax > far) {
+                moved_far = 1;
                 break;
             }
-            for (int k = 0; k < 3; k++) d[k] *= 0.5;
+            if (dmax < xtol) break;
         }
-        if (!moved) break;
-        if (dmax > far) continue; /* a long step: a new model there */
-        /* A correction with the same Hessian: the gradient at the new
-         * point from forward differences of f^2 (n evaluations; the known
-         * curvature removes their first-order bias), one step, one
-         * evaluation. The first model is fitted over +-h around a start up
-         * to ~2 mm away: its step alone stopped up to 0.2 mm short of the
-         * minimum on some draws (docs/estimator.md). */
-        if (dmax > 0.5) {
-            double F0 = f0 * f0, g[3] = {0, 0, 0}, dc[3] = {0, 0, 0};
-            double uc[3] = {0, 0, 0};
-            c->centre = at;
-            for (int k = 0; k < n && !rc; k++) {
-                double uk[3] = {0, 0, 0}, fk;
-                uk[k] = h;
-                rc = sasnav_pair_eval(c->pr, from_unit(c, uk), c->level, 0, NULL, &fk, NULL);
-                c->evals++;
-                g[k] = (fk * fk - F0) / h - 0.5 * h * H[k][k];
-            }
-            if (rc) break;
-            double mg[3] = {-g[0], -g[1], -g[2]}, sl = 0;
-            if (solve_small(n, H, mg, dc)) {
-                for (int k = 0; k < n; k++) sl += g[k] * dc[k];
-                clip_step(n, uc, dc, lb, ub);
-                if (sl < 0) {
-                    double ft;
-                    sasnav_pose e = from_unit(c, dc);
-                    rc = sasnav_pair_eval(c->pr, e, c->level, 0, NULL, &ft, NULL);
-                    c->evals++;
-                    if (!rc && ft < f0) {
-                        at = e;
-                        f0 = ft;
-                    }
-                }
-            }
-        }
-        break;
+        at = from_unit(c, u);
+        fat = fu;
+        if (!moved_far) break;
     }
     free(buf);
     if (rc) return rc;
     *best = at;
-    *fbest = f0;
+    *fbest = fat;
     return SASNAV_OK;
 }
 
@@ -801,7 +794,9 @@ static int refine(sasnav_pair *pr, sasnav_pose start, double pc_spacing, refine_
 /* The final stage at level 2 (k, i) from the level-1 eta result in `out`:
  * Newton steps on the measured quadratic model, in half the eta units,
  * differences of half a unit (0.25 mm of surge, 31 microns of sway, 5e-5
- * rad); a new model when a step is longer than 4 units (2 mm of surge). */
+ * rad), until a step is below 0.1 unit (50 microns of surge) or after 4
+ * steps; a new model when the estimate moves more than 4 units (2 mm of
+ * surge) from where the model was measured. */
 static int refine_final(sasnav_pair *pr, double pc_spacing, refine_out *out)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
@@ -812,7 +807,7 @@ static int refine_final(sasnav_pair *pr, double pc_spacing, refine_out *out)
     sasnav_pose fstep = {pc_spacing / 50.0, lambda / 80.0, pc_spacing / 25.0 / o->range};
     sasnav_pose b = out->error;
     double f = out->eta;
-    int rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, &b, &f);
+    int rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, 0.1, 4, &b, &f);
     out->evaluations_eta += ctx.evals;
     out->evaluations_final = ctx.evals;
     if (rc) return rc;
