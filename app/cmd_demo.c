@@ -323,8 +323,9 @@ static int write_report(demo *d)
     fprintf(f, "| step | seconds |\n|---|---|\n");
     fprintf(f, "| simulation | %.2f |\n", d->seconds_simulate);
     for (int m = 0; m < 2; m++)
-        fprintf(f, "| %s navigation (%d pairs, %.3g s per pair) | %.2f |\n", method_name[m],
-                d->nav[m].n_pairs, d->nav[m].seconds_per_pair, d->nav[m].seconds);
+        fprintf(f, "| %s navigation (%d pairs, %.3g s per pair, %.3g pairs/s, %d at a time) | %.2f |\n",
+                method_name[m], d->nav[m].n_pairs, d->nav[m].seconds_per_pair, d->nav[m].pairs_per_second,
+                d->nav[m].threads_over_pairs, d->nav[m].seconds);
     fprintf(f, "| %d backprojections | %.2f |\n", N_IMAGES, d->seconds_images);
     fprintf(f, "| whole demo | %.2f |\n", sasnav_now_seconds() - d->t_start);
     rc = sasnav_text_commit(&out);

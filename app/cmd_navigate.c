@@ -43,7 +43,7 @@ static const char *help =
     "                    pair --help')\n"
     "  --cross-extent M  along-track extent of the estimation grid (see\n"
     "                    'sasnav pair --help')\n"
-    "  --range-extent M  range extent of the estimation grid (m, default 0.8)\n"
+    "  --range-extent M  range extent of the estimation grid (m, default 1.6)\n"
     "  --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)\n"
     "  --first-pose X,Y,YAW  place the trajectory so that the first ping's PCA\n"
     "                    centroid is at this world pose (an external fix:\n"

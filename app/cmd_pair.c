@@ -37,7 +37,7 @@ static const char *help =
     "                    rad; default 0.06, 0.035 and the grating-lobe-safe yaw)\n"
     "  --range R         centre range of the estimation grid (default: the run's\n"
     "                    range of interest)\n"
-    "  --range-extent M  range extent of the estimation grid (m, default 0.8;\n"
+    "  --range-extent M  range extent of the estimation grid (m, default 1.6;\n"
     "                    split between the sub-intervals)\n"
     "  --subintervals N  split the swath into N range sub-intervals, each with\n"
     "                    its own EPCA offset and estimate (paper III-B)\n"

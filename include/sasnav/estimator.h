@@ -50,9 +50,9 @@ typedef struct {
     sasnav_norm norm;
     double tx_lag;         /* m, EPCA Tx-array offset (default 0.10) */
     double range;          /* m, centre range of the estimation grid (default 10) */
-    double range_extent;   /* m, range extent of the grid (default 0.8: half
-                              the cost of the former 1.6 m; accuracy in
-                              docs/estimator.md) */
+    double range_extent;   /* m, range extent of the grid (default 1.6; 0.8
+                              halves the cost but separates yaw from surge
+                              worse: docs/estimator.md, "Search cost") */
     double cross_extent;   /* m, along-track extent of the grid (default 0: 80 %
                               of the element beam's footprint between first
                               nulls at the grid's range, 1.6 R lambda / D,

@@ -24,7 +24,7 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->norm = SASNAV_NORM_MAX;
     o->tx_lag = 0.10;
     o->range = 10.0;
-    o->range_extent = 0.8;
+    o->range_extent = 1.6;
     o->cross_extent = 0.0;
     o->pixel = 0.0;
     o->coarse_pixel = 0.0;
