@@ -168,6 +168,24 @@ static int stage_residual(stage_ctx *c, const double *u, sasnav_cfloat *r, doubl
     return pair_eval_residual(c->pr, from_unit(c, u), c->level, c->use_eta, r, f);
 }
 
+/* The trial point of lm_stage becomes (dnew, unew) with residual *r1 and
+ * values Fn = fn^2 P^2, fn (the buffers of the old trial and the new one
+ * swap). */
+static void adopt_trial(int n, double *d, double *ut, const double *dnew, const double *unew,
+                        sasnav_cfloat **rt, sasnav_cfloat **r1, double *Ft, double *ft, double Fn,
+                        double fn)
+{
+    sasnav_cfloat *sw = *rt;
+    *rt = *r1;
+    *r1 = sw;
+    *Ft = Fn;
+    *ft = fn;
+    for (int k = 0; k < n; k++) {
+        d[k] = dnew[k];
+        ut[k] = unew[k];
+    }
+}
+
 /* Levenberg-Marquardt on the residual vector of the error function
  * (docs/estimator.md, "Search cost"): eta (or zeta) is the norm of a vector
  * r(sigma) of np entries, so one forward-difference Jacobian (ndim extra
@@ -296,32 +314,11 @@ static int lm_stage(stage_ctx *c, sasnav_pose start, sasnav_pose step, sasnav_po
             double a2 = 0.5 * (F2 - 2 * Ft + F0), a1 = Ft - F0 - a2;
             t = a2 > 0 ? -a1 / (2 * a2) : 2.0;
             t = t > 4.0 ? 4.0 : t < 0.25 ? 0.25 : t;
-            if (F2 < Ft && !(a2 > 0 && fabs(t - 2) > 0.25)) {
-                /* F(2d) is the best point so far and the parabola says
-                 * little more: take it. */
-                sasnav_cfloat *sw = rt;
-                rt = r1;
-                r1 = sw;
-                Ft = F2;
-                ft = f2;
-                dmax = 0;
-                for (int k = 0; k < n; k++) {
-                    d[k] = d2[k];
-                    ut[k] = u2[k];
-                    dmax = fabs(d[k]) > dmax ? fabs(d[k]) : dmax;
-                }
-                t = 1.0;
-            } else if (F2 < Ft) {
-                sasnav_cfloat *sw = rt;
-                rt = r1;
-                r1 = sw;
-                Ft = F2;
-                ft = f2;
-                for (int k = 0; k < n; k++) {
-                    d[k] = d2[k];
-                    ut[k] = u2[k];
-                }
-                t = t / 2; /* relative to the new d */
+            if (F2 < Ft) {
+                /* F(2d) is the best point so far: move the trial there; the
+                 * parabola's vertex, when it says more, is tried next. */
+                t = a2 > 0 && fabs(t - 2) > 0.25 ? t / 2 : 1.0;
+                adopt_trial(n, d, ut, d2, u2, &rt, &r1, &Ft, &ft, F2, f2);
             }
         } else if (!(Ft < F0)) {
             double curv = Ft - F0 - slope;
@@ -335,17 +332,7 @@ static int lm_stage(stage_ctx *c, sasnav_pose start, sasnav_pose step, sasnav_po
             if (rc) break;
             double Fq = fq * prior_factor(c, ps, uq);
             Fq *= Fq;
-            if (Fq < Ft) {
-                sasnav_cfloat *sw = rt;
-                rt = r1;
-                r1 = sw;
-                Ft = Fq;
-                ft = fq;
-                for (int k = 0; k < n; k++) {
-                    d[k] = dt[k];
-                    ut[k] = uq[k];
-                }
-            }
+            if (Fq < Ft) adopt_trial(n, d, ut, dt, uq, &rt, &r1, &Ft, &ft, Fq, fq);
         }
         dmax = 0;
         for (int k = 0; k < n; k++) dmax = fabs(d[k]) > dmax ? fabs(d[k]) : dmax;
