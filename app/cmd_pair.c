@@ -230,6 +230,15 @@ int cmd_pair(int argc, char **argv)
         json_object_set_new(root, "evaluations_zeta", json_integer(r0->evaluations_zeta));
         json_object_set_new(root, "evaluations_eta", json_integer(r0->evaluations_eta));
         json_object_set_new(root, "operator_applications", json_integer(r0->applications));
+        json_object_set_new(root, "evaluations_final", json_integer(r0->evaluations_final));
+        json_object_set_new(
+            root, "stages",
+            json_pack("{s:{s:f,s:I},s:{s:f,s:I},s:{s:f,s:I},s:{s:f,s:I}}", "global", "seconds",
+                      r0->seconds_global, "applications", (json_int_t)r0->applications_global, "zeta",
+                      "seconds", r0->seconds_zeta, "applications", (json_int_t)r0->applications_zeta,
+                      "eta", "seconds", r0->seconds_eta, "applications", (json_int_t)r0->applications_eta,
+                      "final", "seconds", r0->seconds_final, "applications",
+                      (json_int_t)r0->applications_final));
         json_object_set_new(root, "seconds", json_real(r0->seconds));
         const char *st = out[0].rc ? sasnav_strerror(out[0].rc)
                          : r0->status == SASNAV_OK ? "converged" : sasnav_strerror(r0->status);
@@ -281,6 +290,11 @@ int cmd_pair(int argc, char **argv)
                r->zeta, r->eta, r->overlap, r->evaluations, r->evaluations_global, r->evaluations_zeta,
                r->evaluations_eta, r->applications, r->seconds,
                r->status == SASNAV_OK ? "converged" : sasnav_strerror(r->status));
+        printf("time per stage: global %.2f s (%ld applications), zeta %.2f s (%ld), eta %.2f s (%ld), "
+               "final %.2f s (%ld, %d evaluations)\n",
+               r->seconds_global, r->applications_global, r->seconds_zeta, r->applications_zeta,
+               r->seconds_eta, r->applications_eta, r->seconds_final, r->applications_final,
+               r->evaluations_final);
     }
     free(out);
     return 0;

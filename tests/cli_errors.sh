@@ -105,6 +105,12 @@ for k in ("surge", "sway", "yaw", "truth", "zeta_stage", "evaluations", "status"
 t = d["truth"]
 assert d["status"] == "converged", d["status"]
 assert abs(d["surge"] - t["surge"]) < 2e-3 and abs(d["sway"] - t["sway"]) < 5e-4 and abs(d["yaw"] - t["yaw"]) < 2e-3, d
+# Where the time went: the four stages, their applications summing to no
+# more than the whole (the closing evaluation may lie outside them).
+st = d["stages"]
+apps = sum(st[s]["applications"] for s in ("global", "zeta", "eta", "final"))
+assert 0 < apps <= d["operator_applications"], (apps, d["operator_applications"])
+assert all(st[s]["seconds"] >= 0 for s in st), st
 print("ok   pair --json: error (%.3f mm, %.4f mm, %.1e rad)" % (1e3 * (d["surge"] - t["surge"]), 1e3 * (d["sway"] - t["sway"]), d["yaw"] - t["yaw"]))
 PY
     then :; else echo "FAIL pair --json content"; fails=$((fails + 1)); fi
