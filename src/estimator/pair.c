@@ -495,10 +495,6 @@ int sasnav_pair_eval(sasnav_pair *pr, sasnav_pose error, int level, int blurred,
     }
     double zeta_v = sqrt(s) / bn;
     lv->last_error = error;
-    lv->last_blurred = blurred;
-    lv->last_zeta = zeta_v;
-    lv->last_eta = eta_v;
-    lv->last_overlap = ov;
     lv->last_nrm = nrm;
     lv->last_valid = 1;
     int kj = lv->next_kept;
@@ -507,8 +503,8 @@ int sasnav_pair_eval(sasnav_pair *pr, sasnav_pose error, int level, int blurred,
     lv->kept[kj].zeta = zeta_v;
     lv->kept[kj].eta = eta_v;
     lv->kept[kj].overlap = ov;
-    lv->next_kept = (kj + 1) % 4;
-    if (lv->n_kept < 4) lv->n_kept++;
+    lv->next_kept = (kj + 1) % PAIR_KEPT;
+    if (lv->n_kept < PAIR_KEPT) lv->n_kept++;
     if (zeta) *zeta = zeta_v;
     if (eta) *eta = eta_v;
     if (overlap) *overlap = ov;

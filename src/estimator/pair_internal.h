@@ -10,6 +10,7 @@
 #include "sasnav/estimator.h"
 
 #define PAIR_LEVELS 3
+#define PAIR_KEPT 4 /* evaluations whose values a level keeps */
 
 typedef struct {
     int k, i;
@@ -21,17 +22,17 @@ typedef struct {
      * repeated hypothesis skips set_geometry. Kept by the owning level. */
     sasnav_pose q_sigma;
     int q_placed;
-    /* The last evaluation at this level, returned again for a repeated
-     * hypothesis (optimisers re-evaluate their final point). */
+    /* The hypothesis whose psi_p, psi_q the level's buffers hold (valid:
+     * last_valid) and its normalisation, for pair_eval_residual. */
     sasnav_pose last_error;
-    int last_blurred, last_valid;
-    double last_zeta, last_eta, last_overlap, last_nrm;
-    /* Values (not psi) of the last PAIR_KEEP evaluations. */
+    int last_valid;
+    double last_nrm;
+    /* Values (not psi) of the last PAIR_KEPT evaluations. */
     struct {
         sasnav_pose error;
         int blurred;
         double zeta, eta, overlap;
-    } kept[4];
+    } kept[PAIR_KEPT];
     int n_kept, next_kept;
     sasnav_cfloat *rho_p, *rho_q, *psi_p, *psi_q, *tmp, *data_tmp, *cgls_work;
     double *mod_p, *mod_q, *blur_tmp;

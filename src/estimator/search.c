@@ -320,7 +320,7 @@ static int lm_stage(stage_ctx *c, sasnav_pose start, sasnav_pose step, sasnav_po
                 t = a2 > 0 && fabs(t - 2) > 0.25 ? t / 2 : 1.0;
                 adopt_trial(n, d, ut, d2, u2, &rt, &r1, &Ft, &ft, F2, f2);
             }
-        } else if (!(Ft < F0)) {
+        } else {
             double curv = Ft - F0 - slope;
             t = curv > 0 ? -slope / (2 * curv) : 0.5;
         }
