@@ -16,6 +16,7 @@ static const char *help =
     "usage: sasnav navigate run.h5 [--method subspace|dpca] [--long-baselines]\n"
     "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
     "                       [--cross-extent M] [--range-extent M]\n"
+    "                       [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]\n"
     "                       [--threads N] [--json]\n"
     "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
     "\n"
@@ -26,8 +27,16 @@ static const char *help =
     "has one). Where the run holds the truth, prints the per-pair errors and\n"
     "the cumulative errors of the trajectory (the true trajectory moved\n"
     "rigidly onto the estimated first ping: the first pose is not observable).\n"
-    "A pair whose estimate fails is taken as nominal and reported; the exit\n"
-    "status stays 0.\n"
+    "\n"
+    "Every pair gets a verdict (ok, ambiguous, failed, no_overlap; one warning\n"
+    "line on stderr for each pair that is not ok). The pairs are then resolved\n"
+    "jointly over the run: a choice among each pair's candidates with a motion\n"
+    "model of the vehicle and the run's aiding measurements (gyro, DVL: written\n"
+    "by 'sasnav simulate --aiding' or by the user, docs/format.md), new estimates\n"
+    "where a pair failed or disagrees with the aiding, and a robust smoother\n"
+    "fusing estimates, aiding and motion model (docs/navigation.md). A pair\n"
+    "without a usable estimate is bridged by the aiding and the motion model\n"
+    "and reported; the exit status stays 0.\n"
     "\n"
     "  --method M        subspace (default; subspace intersection) or dpca\n"
     "  --long-baselines  also estimate pairs (p, p+2) and combine all by least\n"
@@ -45,6 +54,12 @@ static const char *help =
     "                    'sasnav pair --help')\n"
     "  --range-extent M  range extent of the estimation grid (m, default 1.6)\n"
     "  --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)\n"
+    "  --no-aiding       ignore the run's aiding measurements\n"
+    "  --no-resolve      take each pair's own estimate (no joint resolution, no\n"
+    "                    fusion: the paper's method)\n"
+    "  --motion-sigma S,W,Y  standard deviations of the change of the motion\n"
+    "                    error from one pair to the next (m, m, rad; default\n"
+    "                    0.01,0.01,0.01)\n"
     "  --first-pose X,Y,YAW  place the trajectory so that the first ping's PCA\n"
     "                    centroid is at this world pose (an external fix:\n"
     "                    GNSS, USBL); default: the run's nominal first ping\n"
@@ -88,6 +103,28 @@ static const char *status_text(int status)
     return status == SASNAV_OK ? "ok" : sasnav_strerror(status);
 }
 
+static json_t *candidates_json(const sasnav_pair_result *r)
+{
+    json_t *a = json_array();
+    for (int k = 0; k < r->n_candidates; k++) {
+        const sasnav_pair_candidate *c = &r->candidates[k];
+        json_t *o = pose_json(c->error);
+        json_object_set_new(o, "zeta_scan", real_or_null(c->zeta_scan));
+        json_object_set_new(o, "zeta", real_or_null(c->zeta));
+        json_object_set_new(o, "eta", real_or_null(c->eta));
+        json_object_set_new(o, "refined", json_boolean(c->refined));
+        if (c->same_as >= 0) json_object_set_new(o, "same_as", json_integer(c->same_as));
+        json_object_set_new(o, "chosen", json_boolean(k == r->chosen));
+        json_array_append_new(a, o);
+    }
+    return a;
+}
+
+static int flagged(const sasnav_navigate_pair *np)
+{
+    return np->verdict != SASNAV_VERDICT_OK || np->resolution == SASNAV_RESOLVED_BRIDGED;
+}
+
 static void print_json(const char *input, const sasnav_navigation *nav)
 {
     json_t *root = json_object();
@@ -97,6 +134,9 @@ static void print_json(const char *input, const sasnav_navigation *nav)
                         json_string(nav->method == SASNAV_METHOD_DPCA ? "dpca" : "subspace"));
     json_object_set_new(root, "n_pings", json_integer(n));
     json_object_set_new(root, "failed_pairs", json_integer(nav->n_failed));
+    json_object_set_new(root, "flagged_pairs", json_integer(nav->n_flagged));
+    json_object_set_new(root, "resolved_pairs", json_integer(nav->n_resolved));
+    json_object_set_new(root, "aiding_used", json_boolean(nav->aiding_used));
     json_object_set_new(root, "skipped_long_baselines", json_integer(nav->n_skipped));
     json_object_set_new(root, "has_truth", json_boolean(nav->has_truth));
     if (nav->has_truth) {
@@ -119,10 +159,21 @@ static void print_json(const char *input, const sasnav_navigation *nav)
         json_t *o = json_object();
         json_object_set_new(o, "p", json_integer(np->p));
         json_object_set_new(o, "q", json_integer(np->q));
-        json_object_set_new(o, "status", json_string(status_text(np->status)));
-        json_object_set_new(o, "surge", real_or_null(np->result.error.x));
-        json_object_set_new(o, "sway", real_or_null(np->result.error.y));
-        json_object_set_new(o, "yaw", real_or_null(np->result.error.theta));
+        json_object_set_new(o, "status", json_string(sasnav_verdict_name(np->verdict)));
+        json_object_set_new(o, "first_status", json_string(sasnav_verdict_name(np->first_verdict)));
+        json_object_set_new(o, "estimator", json_string(status_text(np->status)));
+        json_object_set_new(o, "resolution", json_string(sasnav_resolution_name(np->resolution)));
+        json_object_set_new(o, "surge", real_or_null(np->fused.x));
+        json_object_set_new(o, "sway", real_or_null(np->fused.y));
+        json_object_set_new(o, "yaw", real_or_null(np->fused.theta));
+        json_object_set_new(o, "estimate", pose_json(np->result.error));
+        json_object_set_new(o, "eta", real_or_null(np->result.eta));
+        json_object_set_new(o, "margin", isfinite(np->result.margin) ? json_real(np->result.margin) : json_null());
+        json_object_set_new(o, "candidates", candidates_json(&np->result));
+        if (nav->aiding_used) {
+            json_object_set_new(o, "aiding", pose_json(np->aiding));
+            json_object_set_new(o, "aiding_sigma", pose_json(np->aiding_sigma));
+        }
         if (nav->has_truth) {
             json_object_set_new(o, "truth", pose_json(np->truth));
             json_object_set_new(o, "error", pose_json(np->error));
@@ -153,17 +204,20 @@ static void print_text(const sasnav_navigation *nav)
 {
     printf("%-8s %10s %10s %12s", "pair", "surge mm", "sway mm", "yaw rad");
     if (nav->has_truth) printf(" %10s %10s %12s", "err mm", "err mm", "err rad");
-    printf("  %7s  status\n", "s");
+    printf("  %7s  %-10s %s\n", "s", "status", "resolution");
     for (int j = 0; j < nav->n_pairs; j++) {
         const sasnav_navigate_pair *np = &nav->pairs[j];
         char name[32];
         snprintf(name, sizeof name, "%d-%d", np->p, np->q);
-        printf("%-8s %+10.3f %+10.4f %+12.4e", name, 1e3 * np->result.error.x,
-               1e3 * np->result.error.y, np->result.error.theta);
+        printf("%-8s %+10.3f %+10.4f %+12.4e", name, 1e3 * np->fused.x, 1e3 * np->fused.y,
+               np->fused.theta);
         if (nav->has_truth)
             printf(" %+10.3f %+10.4f %+12.4e", 1e3 * np->error.x, 1e3 * np->error.y, np->error.theta);
-        printf("  %7.2f  %s\n", np->result.seconds, status_text(np->status));
+        printf("  %7.2f  %-10s %s\n", np->result.seconds, sasnav_verdict_name(np->verdict),
+               sasnav_resolution_name(np->resolution));
     }
+    printf("%d pairs flagged, %d resolved over the run%s\n", nav->n_flagged, nav->n_resolved,
+           nav->aiding_used ? " (aiding fused)" : "");
     printf("track angle removed: %.4e rad\n", nav->track_angle);
     if (nav->has_truth) {
         sasnav_pose f = nav->cumulative[nav->n_pings - 1];
@@ -186,7 +240,8 @@ int cmd_navigate(int argc, char **argv)
         {"yaw-sigma", required_argument, 0, 'y'}, {"first-pose", required_argument, 0, 'f'},
         {"anchor-truth", no_argument, 0, 'A'}, {"fix-yaw", no_argument, 0, 'F'},
         {"cross-extent", required_argument, 0, 'X'}, {"surge-sigma", required_argument, 0, 'U'},
-        {"range-extent", required_argument, 0, 'E'},
+        {"range-extent", required_argument, 0, 'E'}, {"no-aiding", no_argument, 0, 'N'},
+        {"no-resolve", no_argument, 0, 'R'}, {"motion-sigma", required_argument, 0, 'M'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -237,6 +292,15 @@ int cmd_navigate(int argc, char **argv)
                 !(no.pair.range_extent > 0 && no.pair.range_extent <= 100))
                 return cli_fail("navigate", 0, "--range-extent needs a length in (0, 100] m");
             break;
+        case 'N': no.use_aiding = 0; break;
+        case 'R': no.resolve = 0; break;
+        case 'M': {
+            double ms[3];
+            if (cli_parse_doubles(optarg, 3, ms) || !(ms[0] > 0 && ms[1] > 0 && ms[2] > 0))
+                return cli_fail("navigate", 0, "--motion-sigma needs three standard deviations > 0");
+            no.motion_sigma = (sasnav_pose){ms[0], ms[1], ms[2]};
+            break;
+        }
         case 'j': json = 1; break;
         case 'o': output = optarg; break;
         case 'h': fputs(help, stdout); return 0;
@@ -285,12 +349,18 @@ int cmd_navigate(int argc, char **argv)
         sasnav_navigation_free(&nav);
         return cli_fail("navigate", rc, "cannot write %s", output);
     }
-    for (int j = 0; j < nav.n_pairs; j++)
-        if (nav.pairs[j].status != SASNAV_OK)
-            fprintf(stderr, "sasnav navigate: warning: pair %d-%d: %s%s\n", nav.pairs[j].p,
-                    nav.pairs[j].q, sasnav_strerror(nav.pairs[j].status),
-                    nav.pairs[j].status == SASNAV_ERR_NOT_CONVERGED ? " (estimate kept)"
-                                                                   : " (nominal used)");
+    for (int j = 0; j < nav.n_pairs; j++) {
+        const sasnav_navigate_pair *np = &nav.pairs[j];
+        if (flagged(np))
+            fprintf(stderr, "sasnav navigate: warning: pair %d-%d is %s (%s%s%s)\n", np->p, np->q,
+                    np->resolution == SASNAV_RESOLVED_BRIDGED ? "bridged" : sasnav_verdict_name(np->verdict),
+                    np->status != SASNAV_OK ? sasnav_strerror(np->status) : "estimate",
+                    np->resolution == SASNAV_RESOLVED_BRIDGED ? ": aiding and motion model used" : "",
+                    np->resolution == SASNAV_RESOLVED_NONE ? "" : "; resolved over the run");
+        else if (np->resolution != SASNAV_RESOLVED_NONE)
+            fprintf(stderr, "sasnav navigate: pair %d-%d: first %s, %s over the run, now ok\n", np->p,
+                    np->q, sasnav_verdict_name(np->first_verdict), sasnav_resolution_name(np->resolution));
+    }
     if (nav.n_skipped > 0)
         fprintf(stderr, "sasnav navigate: %d long baselines skipped (< 2 phase centres overlap)\n",
                 nav.n_skipped);

@@ -98,12 +98,55 @@ typedef struct {
                               "no overlap" (default 1e-2; ~0.5 at nominal
                               paper-pair, < 1e-3 once no phase centres overlap) */
     int max_evaluations;   /* per local stage (default 400) */
+    double verdict_eta_max;   /* final eta above which the estimate is
+                                 "failed" (default 0.6: docs/estimator.md,
+                                 "Verdict") */
+    double verdict_margin_min;/* level-1 eta of the best other candidate over
+                                 the chosen one's below which the estimate
+                                 is "ambiguous" (default 1.15) */
     int nthreads;          /* OpenMP threads for the operators (0 = default) */
     sasnav_op_opts op;     /* operator options (default: sasnav_op's, with
                               tolerance 1e-3: docs/estimator.md) */
 } sasnav_pair_opts;
 
 void sasnav_pair_default_opts(sasnav_pair_opts *opts);
+
+/* How far an estimate can be trusted (docs/estimator.md, "Verdict"),
+ * calibrated on simulations:
+ *   OK          the data chose one candidate clearly and explain it well;
+ *   AMBIGUOUS   another candidate of the valley (typically one phase-centre
+ *               spacing of surge and spacing / range of yaw away) explains
+ *               the data nearly as well: the pair needs outside help (the
+ *               run's motion model, aiding sensors: sasnav_navigate);
+ *   FAILED      no candidate explains the data (eta above its bound), or a
+ *               stage did not converge: the estimate is probably wrong;
+ *   NO_OVERLAP  the pings share (almost) no observed scene. */
+typedef enum {
+    SASNAV_VERDICT_OK = 0,
+    SASNAV_VERDICT_AMBIGUOUS = 1,
+    SASNAV_VERDICT_FAILED = 2,
+    SASNAV_VERDICT_NO_OVERLAP = 3
+} sasnav_verdict;
+
+/* "ok", "ambiguous", "failed", "no_overlap" ("unknown" otherwise). */
+const char *sasnav_verdict_name(int verdict);
+
+/* Candidates: the local minima of the global stage's valley scan (lowest
+ * score first). */
+#define SASNAV_PAIR_MAX_CANDIDATES 4
+/* At most this many of them go through the zeta and level-1 eta stages. */
+#define SASNAV_PAIR_REFINED_CANDIDATES 3
+
+typedef struct {
+    sasnav_pose error;   /* motion error: after the zeta and level-1 eta
+                            stages when refined, else the scan's point */
+    double zeta_scan;    /* zeta of the valley scan there (NaN: no scan) */
+    double zeta, eta;    /* after the zeta and level-1 eta stages (NaN
+                            when not refined) */
+    int refined;
+    int same_as;         /* index of an earlier candidate it converged to
+                            (-1: a distinct point) */
+} sasnav_pair_candidate;
 
 /* Result of one estimate. Motion error = displacement - nominal displacement
  * (component-wise; surge, sway, yaw). */
@@ -131,6 +174,15 @@ typedef struct {
     double seconds_global, seconds_zeta, seconds_eta, seconds_final;
     long applications_global, applications_zeta, applications_eta, applications_final;
     int evaluations_final;     /* of evaluations_eta, those at level 2 */
+    /* Trust (docs/estimator.md, "Verdict"): */
+    int verdict;               /* sasnav_verdict */
+    int n_candidates;          /* entries of candidates[] */
+    sasnav_pair_candidate candidates[SASNAV_PAIR_MAX_CANDIDATES];
+    int chosen;                /* index of the candidate that became the
+                                  estimate (error: its final-stage value) */
+    double margin;             /* level-1 eta of the best other distinct
+                                  refined candidate over the chosen one's
+                                  (INFINITY: no other candidate) */
 } sasnav_pair_result;
 
 typedef struct sasnav_pair sasnav_pair;
@@ -159,6 +211,11 @@ int sasnav_pair_eval(sasnav_pair *pair, sasnav_pose error, int level, int blurre
 
 /* Full two-stage estimate (with the global stage if enabled). */
 int sasnav_pair_estimate(sasnav_pair *pair, sasnav_pair_result *result);
+
+/* The local stages only (zeta, level-1 eta, final), from a given motion
+ * error (e.g. a candidate of an earlier estimate chosen by
+ * sasnav_navigate's joint resolution); margin INFINITY, one candidate. */
+int sasnav_pair_estimate_from(sasnav_pair *pair, sasnav_pose start, sasnav_pair_result *result);
 
 /* The estimator's grid (p's centroid frame). */
 const sasnav_grid *sasnav_pair_grid(const sasnav_pair *pair);

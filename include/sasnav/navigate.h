@@ -5,6 +5,15 @@
  * (p, p + 1) of a run, with the subspace-intersection estimator
  * (estimator.h) or the DPCA baseline (dpca.h), and optionally of the longer
  * baselines (p, p + 2). It then
+ *   0. resolves the consecutive pairs jointly over the run and fuses them
+ *      with the run's aiding measurements (docs/navigation.md,
+ *      "Resolution over the run"): a Viterbi choice among each pair's
+ *      candidates (their eta, the aiding, a motion model of the vehicle),
+ *      a new estimate from the chosen candidate where it is not the
+ *      pair's own, a new estimate from the aiding's (or the motion
+ *      model's) prediction for failed pairs and pairs that disagree with
+ *      the aiding, then a robust least-squares smoother of the motion
+ *      errors (estimates, aiding, motion model): the fused motion errors;
  *   1. turns them into PCA-centroid poses: the chain composed from the
  *      run's nominal first centroid (sasnav_traj_compose) or, with long
  *      baselines, the weighted least-squares solution over all links
@@ -75,6 +84,24 @@ typedef struct {
     double seconds;      /* wall time since sasnav_navigate started */
 } sasnav_navigate_progress;
 
+/* How the joint resolution treated a pair (sasnav_navigate_pair.resolution). */
+typedef enum {
+    SASNAV_RESOLVED_NONE = 0,        /* the pair's own estimate, kept */
+    SASNAV_RESOLVED_CANDIDATE = 1,   /* another candidate of the pair won the
+                                        joint choice (aiding, motion model)
+                                        and was estimated again from */
+    SASNAV_RESOLVED_REESTIMATED = 2, /* estimated again from the aiding's or
+                                        the motion model's prediction (the
+                                        estimate failed or disagreed with
+                                        the aiding) */
+    SASNAV_RESOLVED_BRIDGED = 3      /* no usable estimate: the fused motion
+                                        error comes from the aiding and the
+                                        motion model alone */
+} sasnav_resolution;
+
+/* "kept", "candidate", "re-estimated", "bridged". */
+const char *sasnav_resolution_name(int resolution);
+
 typedef void (*sasnav_progress_fn)(const sasnav_navigate_progress *progress, void *user);
 
 typedef struct {
@@ -92,6 +119,25 @@ typedef struct {
     sasnav_pose long_sigma;   /* same for (p, p + 2) (default twice link_sigma:
                                  fewer phase centres overlap) */
     int align;                /* 1 (default): remove the fitted track angle */
+    int resolve;              /* 1 (default): joint resolution and fusion of
+                                 the consecutive pairs (step 0 above); 0:
+                                 each pair's estimate alone (the paper's
+                                 method) */
+    int use_aiding;           /* 1 (default): fuse the run's aiding
+                                 measurements when it has them */
+    sasnav_pose motion_sigma; /* standard deviation of the change of the
+                                 motion error from one pair to the next (the
+                                 vehicle's changes of surge velocity and
+                                 yaw rate over a ping interval; default
+                                 0.01 m, 0.01 m, 0.01 rad: the agile
+                                 paper-trajectory motion, docs/navigation.md) */
+    double eta_weight;        /* weight of ln(eta / lowest eta) in the joint
+                                 choice (default 20) */
+    double aiding_gate;       /* an estimate further from the aiding than a
+                                 quarter of a phase-centre slip (d / 4 of
+                                 surge, d / (4 R) of yaw) plus this many of
+                                 the aiding's standard deviations is
+                                 estimated again from the aiding (default 5) */
     int nthreads;             /* OpenMP threads of the estimators (0 = OpenMP
                                  default); copied into pair and dpca */
     sasnav_progress_fn progress; /* may be NULL */
@@ -112,7 +158,18 @@ typedef struct {
     sasnav_pair_result result; /* the estimator's result (motion error in
                                   result.error) */
     sasnav_pose truth;         /* true motion error (0 without truth) */
-    sasnav_pose error;         /* result.error - truth (0 without truth) */
+    sasnav_pose error;         /* fused - truth (0 without truth) */
+    /* Trust and fusion (consecutive pairs; long baselines keep their
+     * estimate: fused = result.error): */
+    int verdict;               /* sasnav_verdict of the estimate in `result`
+                                  after the resolution (an estimate chosen
+                                  or confirmed by the aiding is "ok") */
+    int first_verdict;         /* the estimator's verdict before it */
+    int resolution;            /* sasnav_resolution */
+    sasnav_pose aiding;        /* aiding measurement of the motion error */
+    sasnav_pose aiding_sigma;  /* its standard deviations (+inf: none) */
+    sasnav_pose fused;         /* fused motion error (what the trajectory
+                                  is built from) */
 } sasnav_navigate_pair;
 
 /* Output of sasnav_navigate; release the arrays with sasnav_navigation_free. */
@@ -124,6 +181,11 @@ typedef struct {
                                      baselines (p, p + 2) that were estimated */
     sasnav_navigate_pair *pairs;
     int n_failed;                 /* pairs whose estimate failed (nominal used) */
+    int n_flagged;                /* pairs whose final verdict is not "ok" or
+                                     that were bridged */
+    int n_resolved;               /* pairs the joint resolution changed
+                                     (candidate, re-estimated, bridged) */
+    int aiding_used;              /* 1: the run's aiding was fused */
     int n_skipped;                /* long baselines not estimated (< 2 phase
                                      centres overlap) */
     sasnav_pose *centroids;       /* n_pings estimated PCA centroids (aligned) */

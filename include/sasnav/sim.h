@@ -42,6 +42,36 @@ typedef struct {
     uint64_t seed;
 } sasnav_trajectory_params;
 
+/* Aiding sensors of a simulated run (docs/config.md, "aiding"): a gyro
+ * (or INS heading) and a DVL, measuring each ping interval of the TRUE
+ * PCA-centroid trajectory (sasnav_aiding in run.h) with the error model
+ *   gyro: mean yaw rate + b_g + n,  b_g ~ N(0, gyro_bias) per run,
+ *         n ~ N(0, gyro_arw / sqrt(dt)) per interval (angle random walk);
+ *   DVL:  (1 + s) v + b_v + n,      s ~ N(0, dvl_scale) per run,
+ *         b_v ~ N(0, dvl_bias) per run and component,
+ *         n ~ N(0, dvl_noise) per interval and component.
+ * The standard deviations written with the measurements combine the terms
+ * (sqrt(arw^2 / dt + bias^2); sqrt(noise^2 + bias^2 + (scale v)^2)). The
+ * defaults are a navigation-grade INS and a 600 kHz DVL (docs/config.md
+ * gives the datasheets). */
+typedef struct {
+    int enabled;             /* 1: write aiding measurements (default 0) */
+    int gyro, dvl;           /* sensors present (default 1, 1) */
+    double gyro_arw;         /* rad/sqrt(s) (default 0.002 deg/sqrt(h)) */
+    double gyro_bias;        /* rad/s (default 0.003 deg/h) */
+    double dvl_noise;        /* m/s per ping interval (default 0.003) */
+    double dvl_bias;         /* m/s (default 0.001) */
+    double dvl_scale;        /* relative (default 0.002) */
+    uint64_t seed;           /* error draws (default 13) */
+} sasnav_aiding_params;
+
+/* Fills the defaults above (enabled = 0). */
+void sasnav_aiding_default(sasnav_aiding_params *ap);
+
+/* Writes run->aiding from run->truth with the error model of `ap` (ping
+ * epochs p * ping_spacing / speed). Errors: no truth, bad parameters. */
+int sasnav_simulate_aiding(const sasnav_aiding_params *ap, double speed, sasnav_run *run);
+
 /* A complete simulated scenario (what a config file or a preset describes). */
 typedef struct {
     char name[64];
@@ -58,6 +88,7 @@ typedef struct {
     char scene_file[512];
     double snr_db;                 /* additive noise; +inf = noise-free */
     uint64_t noise_seed;
+    sasnav_aiding_params aiding;   /* aiding sensors (off unless enabled) */
     sasnav_grid image_grid;        /* default grid for imaging */
 } sasnav_scenario;
 
@@ -83,7 +114,8 @@ int sasnav_simulate_raw(const sasnav_scenario *sc, const sasnav_scene *scene,
                         const sasnav_ping_pose *truth, sasnav_run *run,
                         const sasnav_op_opts *opts);
 
-/* Complete simulation: scene, trajectories, raw data. Sets run->nav to the
+/* Complete simulation: scene, trajectories, raw data, and the aiding
+ * measurements when sc->aiding.enabled. Sets run->nav to the
  * nominal poses and run->truth to the true ones. `scene` may be NULL: the
  * scene is then built from the scenario (ripples or point targets); a
  * SASNAV_SCENE_FILE scenario needs the caller to load the scene and pass it. */

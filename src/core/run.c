@@ -69,6 +69,81 @@ sasnav_cfloat *sasnav_run_ping(const sasnav_run *run, int p)
     return run->raw + (size_t)p * (size_t)run->array.n_rx * (size_t)run->win.n_samples;
 }
 
+void sasnav_aiding_free(sasnav_aiding *a)
+{
+    if (!a) return;
+    free(a->time);
+    free(a->yaw_rate);
+    free(a->yaw_rate_sigma);
+    free(a->velocity);
+    free(a->velocity_sigma);
+    free(a);
+}
+
+int sasnav_run_alloc_aiding(sasnav_run *run, int with_yaw_rate, int with_velocity)
+{
+    if (!run || run->n_pings < 1) return sasnav_set_error(SASNAV_ERR_ARG, "aiding needs a run");
+    size_t n = (size_t)run->n_pings;
+    sasnav_aiding *a = calloc(1, sizeof *a);
+    if (!a) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    a->time = calloc(n, sizeof(double));
+    int bad = !a->time;
+    if (with_yaw_rate) {
+        a->yaw_rate = calloc(n, sizeof(double));
+        a->yaw_rate_sigma = malloc(n * sizeof(double));
+        bad |= !a->yaw_rate || !a->yaw_rate_sigma;
+        for (size_t p = 0; !bad && p < n; p++) a->yaw_rate_sigma[p] = INFINITY;
+    }
+    if (with_velocity) {
+        a->velocity = calloc(2 * n, sizeof(double));
+        a->velocity_sigma = malloc(2 * n * sizeof(double));
+        bad |= !a->velocity || !a->velocity_sigma;
+        for (size_t p = 0; !bad && p < 2 * n; p++) a->velocity_sigma[p] = INFINITY;
+    }
+    if (bad) {
+        sasnav_aiding_free(a);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    }
+    sasnav_aiding_free(run->aiding);
+    run->aiding = a;
+    return SASNAV_OK;
+}
+
+/* Values finite, standard deviations > 0 or +inf. */
+static int aiding_values_check(const double *v, const double *sigma, size_t n, const char *what)
+{
+    for (size_t k = 0; k < n; k++) {
+        if (!isfinite(v[k]))
+            return sasnav_set_error(SASNAV_ERR_ARG, "aiding %s entry %zu is not finite", what, k);
+        if (!(sigma[k] > 0))
+            return sasnav_set_error(SASNAV_ERR_ARG,
+                                    "aiding %s standard deviation %zu must be > 0 (got %g)", what, k,
+                                    sigma[k]);
+    }
+    return SASNAV_OK;
+}
+
+int sasnav_aiding_check(const sasnav_aiding *a, int n_pings)
+{
+    if (!a) return SASNAV_OK;
+    if (n_pings < 1 || !a->time) return sasnav_set_error(SASNAV_ERR_ARG, "aiding has no ping times");
+    for (int p = 0; p < n_pings; p++) {
+        if (!isfinite(a->time[p]))
+            return sasnav_set_error(SASNAV_ERR_ARG, "aiding time of ping %d is not finite", p);
+        if (p > 0 && !(a->time[p] > a->time[p - 1]))
+            return sasnav_set_error(SASNAV_ERR_ARG,
+                                    "aiding times must increase (ping %d at %g s, ping %d at %g s)",
+                                    p - 1, a->time[p - 1], p, a->time[p]);
+    }
+    if (!a->yaw_rate != !a->yaw_rate_sigma || !a->velocity != !a->velocity_sigma)
+        return sasnav_set_error(SASNAV_ERR_ARG, "aiding values without standard deviations");
+    int rc = SASNAV_OK;
+    if (a->yaw_rate) rc = aiding_values_check(a->yaw_rate, a->yaw_rate_sigma, (size_t)n_pings, "yaw rate");
+    if (!rc && a->velocity)
+        rc = aiding_values_check(a->velocity, a->velocity_sigma, 2 * (size_t)n_pings, "velocity");
+    return rc;
+}
+
 static int pose_finite(sasnav_pose a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.theta); }
 
 static int poses_check(const sasnav_ping_pose *poses, int n, const char *what)
@@ -106,6 +181,8 @@ int sasnav_run_check(const sasnav_run *run)
         rc = poses_check(run->truth, run->n_pings, "true pose");
         if (rc) return rc;
     }
+    rc = sasnav_aiding_check(run->aiding, run->n_pings);
+    if (rc) return rc;
     const float *v = (const float *)run->raw; /* C11 6.2.5: complex = float[2] */
     for (size_t k = 0; k < 2 * n; k++)
         if (!isfinite(v[k])) {
@@ -124,6 +201,7 @@ void sasnav_run_free(sasnav_run *run)
     free(run->raw);
     free(run->nav);
     free(run->truth);
+    sasnav_aiding_free(run->aiding);
     free(run);
 }
 
@@ -167,6 +245,28 @@ int sasnav_run_subset(const sasnav_run *run, const int *pings, int n_pings, cons
     r->speed = run->speed;
     r->tx_lag = run->tx_lag;
     r->range_of_interest = run->range_of_interest;
+    int consecutive = run->aiding != NULL;
+    for (int i = 1; i < n_pings && consecutive; i++) consecutive = pings[i] == pings[i - 1] + 1;
+    if (consecutive) {
+        const sasnav_aiding *ai = run->aiding;
+        rc = sasnav_run_alloc_aiding(r, ai->yaw_rate != NULL, ai->velocity != NULL);
+        if (rc) {
+            sasnav_run_free(r);
+            return rc;
+        }
+        for (int i = 0; i < n_pings; i++) {
+            int p = pings[i];
+            r->aiding->time[i] = ai->time[p];
+            if (ai->yaw_rate) {
+                r->aiding->yaw_rate[i] = ai->yaw_rate[p];
+                r->aiding->yaw_rate_sigma[i] = ai->yaw_rate_sigma[p];
+            }
+            for (int k = 0; ai->velocity && k < 2; k++) {
+                r->aiding->velocity[2 * i + k] = ai->velocity[2 * p + k];
+                r->aiding->velocity_sigma[2 * i + k] = ai->velocity_sigma[2 * p + k];
+            }
+        }
+    }
     *out = r;
     return SASNAV_OK;
 }

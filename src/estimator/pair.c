@@ -29,6 +29,8 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->pixel = 0.0;
     o->coarse_pixel = 0.0;
     o->blur = 0.075;
+    o->verdict_eta_max = 0.6;
+    o->verdict_margin_min = 1.15;
     o->blur_cross = 0.0;
     o->error_extent = 0.0;
     o->error_taper = 0.0;
@@ -233,7 +235,9 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
         !isfinite(o->range + o->range_extent + o->cross_extent + o->tx_lag + o->blur) ||
         !(o->blur >= 0) || !(o->yaw_sigma >= 0) || !isfinite(o->yaw_sigma) ||
         !(o->surge_sigma >= 0) || !isfinite(o->surge_sigma) ||
-        !(o->box.x >= 0 && o->box.y >= 0 && o->box.theta >= 0)) {
+        !(o->box.x >= 0 && o->box.y >= 0 && o->box.theta >= 0) ||
+        !(o->verdict_eta_max > 0) || !(o->verdict_margin_min >= 1) ||
+        !isfinite(o->verdict_margin_min)) {
         free(pr);
         return sasnav_set_error(SASNAV_ERR_ARG, "invalid estimator options");
     }
@@ -516,16 +520,20 @@ const sasnav_pair_opts *sasnav_pair_options(const sasnav_pair *pr) { return &pr-
 long sasnav_pair_applications(const sasnav_pair *pr) { return pr->applications; }
 
 /* Loads |v| minus its mean into the zero-padded correlation buffer. */
-static void load_modulus(const pair_level *lv, const sasnav_cfloat *v, fftwf_complex *buf)
+static double load_modulus(const pair_level *lv, const sasnav_cfloat *v, fftwf_complex *buf)
 {
     int nx = lv->grid.nx, ny = lv->grid.ny;
-    double mean = 0;
+    double mean = 0, energy = 0;
     for (size_t j = 0; j < lv->np; j++) mean += cabsf(v[j]);
     mean /= (double)lv->np;
     memset(buf, 0, sizeof(fftwf_complex) * (size_t)lv->xc_nx * lv->xc_ny);
     for (int iy = 0; iy < ny; iy++)
-        for (int ix = 0; ix < nx; ix++)
-            buf[(size_t)iy * lv->xc_nx + ix] = (float)(cabsf(v[(size_t)iy * nx + ix]) - mean);
+        for (int ix = 0; ix < nx; ix++) {
+            double m = cabsf(v[(size_t)iy * nx + ix]) - mean;
+            buf[(size_t)iy * lv->xc_nx + ix] = (float)m;
+            energy += m * m;
+        }
+    return energy;
 }
 
 /* Parabolic sub-sample offset of a peak from three samples. */
@@ -535,7 +543,8 @@ static double parabolic(double a, double b, double c)
     return d < 0 ? 0.5 * (a - c) / d : 0.0;
 }
 
-int pair_image_shift(sasnav_pair *pr, int level, sasnav_pose error, double *sx, double *sy)
+int pair_image_shift(sasnav_pair *pr, int level, sasnav_pose error, double *sx, double *sy,
+                     double *peak)
 {
     pair_level *lv = &pr->level[level];
     int rc = place_q(pr, level, error);
@@ -547,11 +556,35 @@ int pair_image_shift(sasnav_pair *pr, int level, sasnav_pose error, double *sx, 
     rc = sasnav_cgls(lv->op_q, pr->data_q, &co, lv->rho_q, lv->cgls_work);
     pr->applications += 1 + 2L * lv->k;
     if (rc) return rc;
-    load_modulus(lv, lv->rho_p, lv->xc_p);
-    load_modulus(lv, lv->rho_q, lv->xc_q);
+    double ep = load_modulus(lv, lv->rho_p, lv->xc_p);
+    double eq = load_modulus(lv, lv->rho_q, lv->xc_q);
     fftwf_execute(lv->xc_fwd_p);
     fftwf_execute(lv->xc_fwd_q);
     size_t n = (size_t)lv->xc_nx * lv->xc_ny;
+    /* High-pass both moduli (a Gaussian of PAIR_SHIFT_HIGHPASS metres
+     * removed): the slowly varying beam-pattern envelopes the two images
+     * share otherwise make a correlation peak near zero shift whatever the
+     * content's shift (docs/estimator.md, "Global stage"). */
+    const double hp = PAIR_SHIFT_HIGHPASS;
+    {
+        ep = eq = 0;
+        for (int iy = 0; iy < lv->xc_ny; iy++) {
+            int fy = iy <= lv->xc_ny / 2 ? iy : iy - lv->xc_ny;
+            double ky = 2.0 * M_PI * fy / (lv->xc_ny * lv->grid.dy);
+            for (int ix = 0; ix < lv->xc_nx; ix++) {
+                int fx = ix <= lv->xc_nx / 2 ? ix : ix - lv->xc_nx;
+                double kx = 2.0 * M_PI * fx / (lv->xc_nx * lv->grid.dx);
+                float w = (float)(1.0 - exp(-0.5 * (kx * kx + ky * ky) * hp * hp));
+                size_t j = (size_t)iy * lv->xc_nx + ix;
+                lv->xc_p[j] *= w;
+                lv->xc_q[j] *= w;
+                ep += crealf(lv->xc_p[j] * conjf(lv->xc_p[j]));
+                eq += crealf(lv->xc_q[j] * conjf(lv->xc_q[j]));
+            }
+        }
+        ep /= (double)n;
+        eq /= (double)n;
+    }
     for (size_t j = 0; j < n; j++) lv->xc_q[j] *= conjf(lv->xc_p[j]);
     fftwf_execute(lv->xc_inv);
     /* c[s] = sum_z |p|(z) |q|(z + s): its peak is the shift of q's content. */
@@ -574,6 +607,8 @@ int pair_image_shift(sasnav_pair *pr, int level, sasnav_pose error, double *sx, 
     if (fy > H / 2) fy -= H;
     *sx = fx * lv->grid.dx;
     *sy = fy * lv->grid.dy;
+    /* Unnormalised FFTs: the correlation is n times the sum. */
+    if (peak) *peak = ep > 0 && eq > 0 ? best / ((double)n * sqrt(ep * eq)) : 0.0;
     return SASNAV_OK;
 }
 
@@ -598,4 +633,15 @@ int pair_eval_residual(sasnav_pair *pr, sasnav_pose error, int level, int use_et
         for (size_t j = 0; j < lv->np; j++) r[j] = (cabsf(lv->psi_p[j]) - cabsf(lv->psi_q[j])) * inv;
     *f = use_eta ? e : z;
     return SASNAV_OK;
+}
+
+const char *sasnav_verdict_name(int verdict)
+{
+    switch (verdict) {
+    case SASNAV_VERDICT_OK: return "ok";
+    case SASNAV_VERDICT_AMBIGUOUS: return "ambiguous";
+    case SASNAV_VERDICT_FAILED: return "failed";
+    case SASNAV_VERDICT_NO_OVERLAP: return "no_overlap";
+    default: return "unknown";
+    }
 }

@@ -563,8 +563,14 @@ static sasnav_pose valley_point(const sasnav_pair *pr, sasnav_pose hyp_disp, dou
     return e;
 }
 
+/* A local minimum of the valley scan. */
+typedef struct {
+    sasnav_pose e;
+    double zeta, score;
+} scan_min;
+
 static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, int *evals,
-                        double *ambiguity, sasnav_pose *second, int *has_second)
+                        double *ambiguity, scan_min *mins, int *n_mins)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
     const pair_level *lv = &pr->level[0];
@@ -575,17 +581,42 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     sasnav_pose hyp = c;
     (void)0;
     double sx = 0, sy = 0;
-    /* Two correlation passes: the second, at the first pass's point of the
-     * valley with the prior yaw, removes most of the distortion of the
-     * first image. */
-    for (int pass = 0; pass < 2; pass++) {
-        if ((rc = pair_image_shift(pr, 0, hyp, &sx, &sy))) return rc;
-        sasnav_pose hd = {pr->nominal.x + hyp.x, pr->nominal.y + hyp.y, pr->nominal.theta + hyp.theta};
-        hyp = valley_point(pr, hd, zx, zy, sx, sy, pr->nominal.theta + c.theta);
-        if (fabs(hyp.x - c.x) > b.x || fabs(hyp.y - c.y) > b.y) hyp = c;
+    /* The image shift at one yaw hypothesis fixes the valley only when the
+     * two images correlate: a yaw error of the hypothesis of more than
+     * about 5e-3 rad (a 5 cm rotation of the scene across a 1.6 m grid at
+     * 10 m) decorrelates their moduli, and the peak then comes from the
+     * beam-pattern envelopes the two images share (near zero shift). So the
+     * shift is measured at yaw hypotheses every `ystep` over the box and
+     * the one whose moduli correlate best gives the valley; then a second
+     * pass at that hypothesis's point of the valley removes most of the
+     * translation's distortion. docs/estimator.md, "Global stage". */
+    double ystep = 0.004;
+    int ny_h = o->fix_yaw ? 0 : (int)floor(b.theta / ystep);
+    if (ny_h > 50) ny_h = 50;
+    double best_peak = -HUGE_VAL;
+    sasnav_pose best_hyp = c;
+    for (int jh = -ny_h; jh <= ny_h; jh++) {
+        sasnav_pose h0 = {c.x, c.y, c.theta + jh * ystep};
+        double peak;
+        if ((rc = pair_image_shift(pr, 0, h0, &sx, &sy, &peak))) return rc;
+        sasnav_pose hd0 = {pr->nominal.x + h0.x, pr->nominal.y + h0.y, pr->nominal.theta + h0.theta};
+        sasnav_pose v = valley_point(pr, hd0, zx, zy, sx, sy, pr->nominal.theta + h0.theta);
+        if (fabs(v.x - c.x) > b.x || fabs(v.y - c.y) > b.y) continue;
+        /* The second pass at the valley point: there the two images align
+         * when the hypothesis's yaw is right, and their correlation is the
+         * hypothesis's score. */
+        if ((rc = pair_image_shift(pr, 0, v, &sx, &sy, &peak))) return rc;
+        sasnav_pose hv = {pr->nominal.x + v.x, pr->nominal.y + v.y, pr->nominal.theta + v.theta};
+        sasnav_pose v2 = valley_point(pr, hv, zx, zy, sx, sy, pr->nominal.theta + v.theta);
+        if (fabs(v2.x - c.x) > b.x || fabs(v2.y - c.y) > b.y) continue;
+        if (peak > best_peak) {
+            best_peak = peak;
+            best_hyp = v2;
+        }
     }
+    hyp = best_hyp;
     sasnav_pose hd = {pr->nominal.x + hyp.x, pr->nominal.y + hyp.y, pr->nominal.theta + hyp.theta};
-    if ((rc = pair_image_shift(pr, 0, hyp, &sx, &sy))) return rc;
+    if ((rc = pair_image_shift(pr, 0, hyp, &sx, &sy, NULL))) return rc;
     /* Scan the valley (with the yaw held: its single point at the prior
      * yaw) in yaw steps that move the scene by half a
      * phase-centre spacing at the grid's range: the valley's ambiguous
@@ -634,8 +665,7 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
      * the priors: 1 + (yaw offset / yaw_sigma)^2 and 1 + (surge offset /
      * surge_sigma)^2 (each where given). The ratio of the two lowest minima
      * of zeta itself measures how well the data alone resolve the valley. */
-    double fbest = HUGE_VAL, sbest = HUGE_VAL, sbest2 = HUGE_VAL, z1 = HUGE_VAL, z2 = HUGE_VAL;
-    sasnav_pose arg = hyp, arg2 = hyp;
+    double z1 = HUGE_VAL, z2 = HUGE_VAL;
     double *score = malloc(sizeof(double) * (size_t)ns);
     if (!score) {
         free(zs);
@@ -651,18 +681,21 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
         }
         score[j] *= surge_prior(pr, es[j]);
     }
+    /* The local minima of the score, lowest first (insertion into the
+     * short sorted list). */
+    int nm = 0;
     for (int j = 0; j < ns; j++) {
         if (!(zs[j] < HUGE_VAL)) continue;
         if (!((j > 0 && score[j - 1] < score[j]) || (j + 1 < ns && score[j + 1] <= score[j]))) {
-            if (score[j] < sbest) {
-                sbest2 = sbest;
-                arg2 = arg;
-                sbest = score[j];
-                fbest = zs[j];
-                arg = es[j];
-            } else if (score[j] < sbest2) {
-                sbest2 = score[j];
-                arg2 = es[j];
+            scan_min m = {es[j], zs[j], score[j]};
+            int at = nm < SASNAV_PAIR_MAX_CANDIDATES ? nm : SASNAV_PAIR_MAX_CANDIDATES;
+            while (at > 0 && mins[at - 1].score > m.score) {
+                if (at < SASNAV_PAIR_MAX_CANDIDATES) mins[at] = mins[at - 1];
+                at--;
+            }
+            if (at < SASNAV_PAIR_MAX_CANDIDATES) {
+                mins[at] = m;
+                if (nm < SASNAV_PAIR_MAX_CANDIDATES) nm++;
             }
         }
         if ((j > 0 && zs[j - 1] < zs[j]) || (j + 1 < ns && zs[j + 1] <= zs[j])) continue;
@@ -677,8 +710,9 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     free(zs);
     free(es);
     *ambiguity = z2 < HUGE_VAL && z2 > 0 ? z1 / z2 : 0.0;
-    *second = arg2;
-    *has_second = sbest2 < HUGE_VAL;
+    *n_mins = nm;
+    sasnav_pose arg = nm > 0 ? mins[0].e : hyp;
+    double fbest = nm > 0 ? mins[0].zeta : HUGE_VAL;
     /* Local refinement of zeta at level 0 around the best valley point. */
     stage_ctx ctx = {.pr = pr, .level = 0, .use_prior = 1};
     sasnav_pose unit = {pc_spacing, pc_spacing, pc_spacing / o->range};
@@ -805,6 +839,81 @@ static int refine_final(sasnav_pair *pr, double pc_spacing, refine_out *out)
     return SASNAV_OK;
 }
 
+/* Two refined candidates are the same point when they are within a quarter
+ * phase-centre spacing in surge and sway and a quarter of its yaw at the
+ * grid's range. */
+static int same_point(sasnav_pose a, sasnav_pose b, double pc_spacing, double range)
+{
+    return fabs(a.x - b.x) < 0.25 * pc_spacing && fabs(a.y - b.y) < 0.25 * pc_spacing &&
+           fabs(a.theta - b.theta) < 0.25 * pc_spacing / range;
+}
+
+static void add_costs(refine_out *sum, const refine_out *r)
+{
+    sum->seconds_zeta += r->seconds_zeta;
+    sum->seconds_eta += r->seconds_eta;
+    sum->seconds_final += r->seconds_final;
+    sum->applications_zeta += r->applications_zeta;
+    sum->applications_eta += r->applications_eta;
+    sum->applications_final += r->applications_final;
+    sum->evaluations_zeta += r->evaluations_zeta;
+    sum->evaluations_eta += r->evaluations_eta;
+    sum->evaluations_final += r->evaluations_final;
+}
+
+/* The verdict on a finished estimate (docs/estimator.md, "Verdict"). */
+static void judge(const sasnav_pair_opts *o, sasnav_pair_result *res, int converged)
+{
+    if (!(res->overlap >= o->min_overlap)) res->verdict = SASNAV_VERDICT_NO_OVERLAP;
+    else if (!converged || !(res->eta <= o->verdict_eta_max)) res->verdict = SASNAV_VERDICT_FAILED;
+    else if (!(res->margin >= o->verdict_margin_min)) res->verdict = SASNAV_VERDICT_AMBIGUOUS;
+    else res->verdict = SASNAV_VERDICT_OK;
+}
+
+/* The final stage and the result fields from the level-1 result r of the
+ * chosen candidate. */
+static int finish(sasnav_pair *pr, double pc_spacing, refine_out *r, refine_out *sum,
+                  double t0, long apps0, int nglob, sasnav_pair_result *res)
+{
+    const sasnav_pair_opts *o = sasnav_pair_options(pr);
+    int rc = refine_final(pr, pc_spacing, r);
+    if (rc) return rc;
+    sum->evaluations_final += r->evaluations_final;
+    sum->evaluations_eta += r->evaluations_final;
+    sum->seconds_final += r->seconds_final;
+    sum->applications_final += r->applications_final;
+    res->evaluations_zeta = sum->evaluations_zeta;
+    res->evaluations_eta = sum->evaluations_eta;
+    res->evaluations_final = sum->evaluations_final;
+    res->seconds_zeta = sum->seconds_zeta;
+    res->seconds_eta = sum->seconds_eta;
+    res->seconds_final = sum->seconds_final;
+    res->applications_zeta = sum->applications_zeta;
+    res->applications_eta = sum->applications_eta;
+    res->applications_final = sum->applications_final;
+    res->zeta_stage = r->zeta_stage;
+    res->zeta = r->zeta;
+    res->eta = r->eta;
+    res->error = r->error;
+    res->displacement = (sasnav_pose){pr->nominal.x + r->error.x, pr->nominal.y + r->error.y,
+                                      pr->nominal.theta + r->error.theta};
+    rc = sasnav_pair_eval(pr, r->error, PAIR_LEVELS - 1, 0, NULL, NULL, &res->overlap);
+    if (rc) return rc;
+    res->evaluations = 1 + nglob + res->evaluations_zeta + res->evaluations_eta + 1;
+    res->applications = pr->applications - apps0;
+    res->seconds = sasnav_now_seconds() - t0;
+    int converged = !r->zrc && !r->erc;
+    res->status = converged ? SASNAV_OK : SASNAV_ERR_NOT_CONVERGED;
+    if (res->overlap < o->min_overlap) res->status = SASNAV_ERR_NO_OVERLAP;
+    judge(o, res, converged);
+    return SASNAV_OK;
+}
+
+static double pair_pc_spacing(const sasnav_pair *pr)
+{
+    return pr->array.n_rx > 1 ? fabs(pr->array.rx_u[1] - pr->array.rx_u[0]) / 2.0 : 0.025;
+}
+
 int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
 {
     if (!pr || !res) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
@@ -813,7 +922,8 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     double t0 = sasnav_now_seconds();
     long apps0 = pr->applications;
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
-    double pc_spacing = pr->array.n_rx > 1 ? fabs(pr->array.rx_u[1] - pr->array.rx_u[0]) / 2.0 : 0.025;
+    double pc_spacing = pair_pc_spacing(pr);
+    res->margin = INFINITY;
 
     /* Overlap check at the prior. */
     double ov = 0;
@@ -824,16 +934,18 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     if (rc) return rc;
     if (!(ov >= o->min_overlap)) {
         res->status = SASNAV_ERR_NO_OVERLAP;
+        res->verdict = SASNAV_VERDICT_NO_OVERLAP;
         res->overlap = ov;
         return sasnav_set_error(SASNAV_ERR_NO_OVERLAP,
                                 "pings share no observed scene at the prior (kept energy %.2g < %.2g)",
                                 ov, o->min_overlap);
     }
 
-    sasnav_pose start = o->prior, second = o->prior;
-    int nglob = 0, has_second = 0;
+    sasnav_pose start = o->prior;
+    scan_min mins[SASNAV_PAIR_MAX_CANDIDATES];
+    int nglob = 0, nm = 0;
     if (o->global_stage) {
-        rc = global_stage(pr, pc_spacing, &start, &nglob, &res->ambiguity, &second, &has_second);
+        rc = global_stage(pr, pc_spacing, &start, &nglob, &res->ambiguity, mins, &nm);
         if (rc) return rc;
     }
     res->global_stage = start;
@@ -841,63 +953,76 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     res->seconds_global = sasnav_now_seconds() - t0;
     res->applications_global = pr->applications - apps0;
 
-    refine_out r1, r2;
-    rc = refine(pr, start, pc_spacing, &r1);
-    if (rc) return rc;
-    int nzeta = r1.evaluations_zeta, neta = r1.evaluations_eta;
-    refine_out sum = r1;
-    /* When the scan's two best candidates are nearly alike in zeta, both are
-     * carried through the zeta and level-1 eta stages and the lower eta
-     * decides; only the winner goes on to the final stage. At the tank's
-     * track ends zeta prefers the candidate one phase-centre spacing short
-     * (one more shared phase centre) while eta there is 3-6x higher than at
-     * the right one (docs/estimator.md). */
-    if (has_second && res->ambiguity > AMBIGUOUS) {
-        rc = refine(pr, second, pc_spacing, &r2);
-        if (rc) return rc;
-        nzeta += r2.evaluations_zeta;
-        neta += r2.evaluations_eta;
-        sum.evaluations_final += r2.evaluations_final;
-        sum.seconds_zeta += r2.seconds_zeta;
-        sum.seconds_eta += r2.seconds_eta;
-        sum.seconds_final += r2.seconds_final;
-        sum.applications_zeta += r2.applications_zeta;
-        sum.applications_eta += r2.applications_eta;
-        sum.applications_final += r2.applications_final;
-        if (r2.eta < r1.eta) {
-            r1 = r2;
-            res->global_stage = second;
-        }
+    /* The candidates: the scan's lowest minimum (from the global stage's
+     * local refinement), the second lowest, and any further one whose
+     * score is within AMBIGUOUS of the lowest, each through the zeta and
+     * level-1 eta stages; the lowest eta wins and alone goes on to the
+     * final stage. The other candidates' eta tells how clearly the data
+     * chose (the margin of the verdict). Without a global stage the prior
+     * is the only candidate. */
+    if (nm == 0) {
+        mins[0] = (scan_min){start, NAN, NAN};
+        nm = 1;
     }
-    rc = refine_final(pr, pc_spacing, &r1);
+    refine_out r[SASNAV_PAIR_MAX_CANDIDATES], sum;
+    memset(&sum, 0, sizeof sum);
+    int win = -1;
+    res->n_candidates = nm;
+    for (int k = 0; k < nm; k++) {
+        sasnav_pair_candidate *cd = &res->candidates[k];
+        cd->error = mins[k].e;
+        cd->zeta_scan = mins[k].zeta;
+        cd->zeta = cd->eta = NAN;
+        cd->same_as = -1;
+        int refine_it = k == 0 || k == 1 || (k < SASNAV_PAIR_REFINED_CANDIDATES &&
+                                             mins[0].score > AMBIGUOUS * mins[k].score);
+        if (!refine_it) continue;
+        rc = refine(pr, k == 0 ? start : mins[k].e, pc_spacing, &r[k]);
+        if (rc) return rc;
+        add_costs(&sum, &r[k]);
+        cd->refined = 1;
+        cd->error = r[k].error;
+        cd->zeta = r[k].zeta;
+        cd->eta = r[k].eta;
+        for (int j = 0; j < k; j++)
+            if (res->candidates[j].refined && res->candidates[j].same_as < 0 &&
+                same_point(cd->error, res->candidates[j].error, pc_spacing, o->range)) {
+                cd->same_as = j;
+                break;
+            }
+        if (cd->same_as < 0 && (win < 0 || r[k].eta < r[win].eta)) win = k;
+    }
+    res->chosen = win;
+    if (win != 0) res->global_stage = mins[win].e;
+    for (int k = 0; k < nm; k++) {
+        const sasnav_pair_candidate *cd = &res->candidates[k];
+        if (k != win && cd->refined && cd->same_as < 0 && cd->eta / r[win].eta < res->margin)
+            res->margin = cd->eta / r[win].eta;
+    }
+    rc = finish(pr, pc_spacing, &r[win], &sum, t0, apps0, nglob, res);
     if (rc) return rc;
-    neta += r1.evaluations_final;
-    sum.evaluations_final += r1.evaluations_final;
-    sum.seconds_final += r1.seconds_final;
-    sum.applications_final += r1.applications_final;
-    res->evaluations_zeta = nzeta;
-    res->evaluations_final = sum.evaluations_final;
-    res->seconds_zeta = sum.seconds_zeta;
-    res->seconds_eta = sum.seconds_eta;
-    res->seconds_final = sum.seconds_final;
-    res->applications_zeta = sum.applications_zeta;
-    res->applications_eta = sum.applications_eta;
-    res->applications_final = sum.applications_final;
-    res->zeta_stage = r1.zeta_stage;
-    res->zeta = r1.zeta;
-    res->evaluations_eta = neta;
-    res->eta = r1.eta;
-    res->error = r1.error;
-    sasnav_pose best = r1.error;
-    int zrc = r1.zrc, erc = r1.erc;
-    res->displacement = (sasnav_pose){pr->nominal.x + best.x, pr->nominal.y + best.y,
-                                      pr->nominal.theta + best.theta};
-    rc = sasnav_pair_eval(pr, best, PAIR_LEVELS - 1, 0, NULL, NULL, &res->overlap);
-    if (rc) return rc;
-    res->evaluations = 1 + nglob + res->evaluations_zeta + res->evaluations_eta + 1;
-    res->applications = pr->applications - apps0;
-    res->seconds = sasnav_now_seconds() - t0;
-    res->status = (zrc || erc) ? SASNAV_ERR_NOT_CONVERGED : SASNAV_OK;
-    if (res->overlap < o->min_overlap) res->status = SASNAV_ERR_NO_OVERLAP;
     return SASNAV_OK;
+}
+
+int sasnav_pair_estimate_from(sasnav_pair *pr, sasnav_pose start, sasnav_pair_result *res)
+{
+    if (!pr || !res) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    memset(res, 0, sizeof *res);
+    if (!pr->ready) return sasnav_set_error(SASNAV_ERR_ARG, "estimator has no data (call set_data)");
+    if (!isfinite(start.x) || !isfinite(start.y) || !isfinite(start.theta))
+        return sasnav_set_error(SASNAV_ERR_ARG, "estimate_from: the start is not finite");
+    double t0 = sasnav_now_seconds();
+    long apps0 = pr->applications;
+    double pc_spacing = pair_pc_spacing(pr);
+    refine_out r, sum;
+    memset(&sum, 0, sizeof sum);
+    int rc = refine(pr, start, pc_spacing, &r);
+    if (rc) return rc;
+    add_costs(&sum, &r);
+    res->global_stage = start;
+    res->n_candidates = 1;
+    res->candidates[0] = (sasnav_pair_candidate){r.error, NAN, r.zeta, r.eta, 1, -1};
+    res->chosen = 0;
+    res->margin = INFINITY;
+    return finish(pr, pc_spacing, &r, &sum, t0, apps0, 0, res);
 }

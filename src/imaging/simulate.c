@@ -81,6 +81,7 @@ int sasnav_simulate(const sasnav_scenario *sc, const sasnav_scene *scene,
         scene = own;
     }
     if (!rc) rc = sasnav_simulate_raw(sc, scene, run->truth, run, opts);
+    if (!rc && sc->aiding.enabled) rc = sasnav_simulate_aiding(&sc->aiding, sc->traj.speed, run);
     sasnav_scene_free(own);
     if (rc) {
         sasnav_run_free(run);

@@ -169,6 +169,20 @@ static const key_spec config_keys[] = {
     {"noise", "snr_db", V_SNR, SC(snr_db), R_ANY, 0, 0, "dB, or inf for noise-free data"},
     {"noise", "seed", V_SEED, SC(noise_seed), R_ANY, 0, 0, "noise draw"},
 
+    {"aiding", "enabled", V_BOOL, SC(aiding.enabled), R_ANY, 0, 0,
+     "write gyro / DVL measurements of the true trajectory"},
+    {"aiding", "gyro", V_BOOL, SC(aiding.gyro), R_ANY, 0, 0, "a gyro (yaw rate) is present"},
+    {"aiding", "dvl", V_BOOL, SC(aiding.dvl), R_ANY, 0, 0, "a DVL (velocity) is present"},
+    {"aiding", "gyro_arw", V_REAL, SC(aiding.gyro_arw), R_NONNEG, 0, 0,
+     "rad/sqrt(s), angle random walk"},
+    {"aiding", "gyro_bias", V_REAL, SC(aiding.gyro_bias), R_NONNEG, 0, 0, "rad/s, rate bias (1 sigma)"},
+    {"aiding", "dvl_noise", V_REAL, SC(aiding.dvl_noise), R_NONNEG, 0, 0,
+     "m/s, velocity noise per ping interval"},
+    {"aiding", "dvl_bias", V_REAL, SC(aiding.dvl_bias), R_NONNEG, 0, 0, "m/s, velocity bias (1 sigma)"},
+    {"aiding", "dvl_scale", V_REAL, SC(aiding.dvl_scale), R_NONNEG, 0, 0,
+     "scale-factor error (1 sigma, relative)"},
+    {"aiding", "seed", V_SEED, SC(aiding.seed), R_ANY, 0, 0, "aiding error draws"},
+
     {"image", "x_min", V_REAL, IM(x_min), R_ANY, 0, 0, "m, first pixel centre"},
     {"image", "x_max", V_REAL, IM(x_max), R_ANY, 0, 0, "m, last pixel centre"},
     {"image", "nx", V_INT, IM(nx), R_ANY, 1, 1000000, "pixels along track"},
@@ -181,7 +195,7 @@ static const key_spec config_keys[] = {
 
 /* Sections in the order they are written. */
 static const char *const sections[] = {"system", "array", "swath", "trajectory",
-                                       "scene",  "noise", "image"};
+                                       "scene",  "noise", "aiding", "image"};
 #define N_SECTIONS ((int)(sizeof sections / sizeof sections[0]))
 
 static const char *const taper_names[] = {"none", "hann", "hamming"};
@@ -901,7 +915,7 @@ static int read_top(loader *L, struct fy_node *root)
             if (!known)
                 return fail(L, line,
                             "unknown key (known: preset, name, system, array, swath, "
-                            "trajectory, scene, noise, image)");
+                            "trajectory, scene, noise, aiding, image)");
             rc = read_section(L, name, value, line);
         }
         if (rc) return rc;

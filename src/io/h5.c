@@ -136,6 +136,56 @@ static int array_write(h5_ctx *c, const sasnav_array *a)
     return rc;
 }
 
+/* --- aiding: /aiding/time, yaw_rate(+_sigma), velocity(+_sigma) ---------- */
+
+static int aiding_write(h5_ctx *c, int n, const sasnav_aiding *a)
+{
+    hsize_t d1[1] = {(hsize_t)n}, d2[2] = {(hsize_t)n, 2};
+    int rc = h5_create_group(c, "/aiding");
+    if (!rc) rc = h5_write_dataset(c, "/aiding/time", H5_REAL, 1, d1, NULL, a->time, "s");
+    if (!rc && a->yaw_rate) {
+        rc = h5_write_dataset(c, "/aiding/yaw_rate", H5_REAL, 1, d1, NULL, a->yaw_rate, "rad/s");
+        if (!rc)
+            rc = h5_write_dataset(c, "/aiding/yaw_rate_sigma", H5_REAL, 1, d1, NULL,
+                                  a->yaw_rate_sigma, "rad/s");
+    }
+    if (!rc && a->velocity) {
+        rc = h5_write_dataset(c, "/aiding/velocity", H5_REAL, 2, d2, NULL, a->velocity, "m/s");
+        if (!rc)
+            rc = h5_write_dataset(c, "/aiding/velocity_sigma", H5_REAL, 2, d2, NULL,
+                                  a->velocity_sigma, "m/s");
+    }
+    return rc;
+}
+
+/* Reads /aiding into run->aiding (absent: none). Shapes must match the
+ * run's pings; values are checked by sasnav_aiding_check. */
+static int aiding_read(h5_ctx *c, sasnav_run *run)
+{
+    if (!h5_exists(c, "/aiding")) return SASNAV_OK;
+    int yaw = h5_exists(c, "/aiding/yaw_rate"), vel = h5_exists(c, "/aiding/velocity");
+    if (yaw != h5_exists(c, "/aiding/yaw_rate_sigma"))
+        return h5_fail(c, SASNAV_ERR_FORMAT, "/aiding/yaw_rate and yaw_rate_sigma come together");
+    if (vel != h5_exists(c, "/aiding/velocity_sigma"))
+        return h5_fail(c, SASNAV_ERR_FORMAT, "/aiding/velocity and velocity_sigma come together");
+    int rc = sasnav_run_alloc_aiding(run, yaw, vel);
+    if (rc) return h5_reframe(c, rc, "/aiding");
+    sasnav_aiding *a = run->aiding;
+    hsize_t d1[1] = {(hsize_t)run->n_pings}, d2[2] = {(hsize_t)run->n_pings, 2};
+    rc = h5_read_dataset_dims(c, "/aiding/time", H5_REAL, 1, d1, a->time);
+    if (!rc && yaw) rc = h5_read_dataset_dims(c, "/aiding/yaw_rate", H5_REAL, 1, d1, a->yaw_rate);
+    if (!rc && yaw)
+        rc = h5_read_dataset_dims(c, "/aiding/yaw_rate_sigma", H5_REAL, 1, d1, a->yaw_rate_sigma);
+    if (!rc && vel) rc = h5_read_dataset_dims(c, "/aiding/velocity", H5_REAL, 2, d2, a->velocity);
+    if (!rc && vel)
+        rc = h5_read_dataset_dims(c, "/aiding/velocity_sigma", H5_REAL, 2, d2, a->velocity_sigma);
+    if (!rc) {
+        rc = sasnav_aiding_check(a, run->n_pings);
+        if (rc) rc = h5_reframe(c, rc, "/aiding");
+    }
+    return rc;
+}
+
 int sasnav_run_write(const char *path, const sasnav_run *run)
 {
     if (!path) return sasnav_set_error(SASNAV_ERR_ARG, "run file path is NULL");
@@ -151,6 +201,7 @@ int sasnav_run_write(const char *path, const sasnav_run *run)
     if (!rc) rc = array_write(&c, &run->array);
     if (!rc) rc = poses_write(&c, "/nav", run->n_pings, run->nav);
     if (!rc && run->truth) rc = poses_write(&c, "/truth", run->n_pings, run->truth);
+    if (!rc && run->aiding) rc = aiding_write(&c, run->n_pings, run->aiding);
     if (!rc) rc = h5_commit(&c);
     h5_end(&c);
     return rc;
@@ -256,6 +307,7 @@ static int run_read_open(h5_ctx *c, sasnav_run **out)
     H5Dclose(raw);
     if (!rc) rc = poses_read(c, "/nav", run->n_pings, run->nav);
     if (!rc && with_truth) rc = poses_read(c, "/truth", run->n_pings, run->truth);
+    if (!rc) rc = aiding_read(c, run);
     if (!rc) {
         run->ping_spacing = h.ping_spacing;
         run->speed = h.speed;

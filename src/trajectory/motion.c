@@ -18,6 +18,7 @@
 #include "sasnav/sim.h"
 
 #include <math.h>
+#include <string.h>
 
 #define N_WAVES 4
 
@@ -107,6 +108,72 @@ int sasnav_trajectory_true(const sasnav_trajectory_params *tp, sasnav_ping_pose 
                          tp->pair_error.theta};
         sasnav_pose cq = sasnav_pose_compose(sasnav_ping_centroid(&poses[q - 1]), d);
         poses[q] = sasnav_ping_place(cq, &local_q);
+    }
+    return SASNAV_OK;
+}
+
+void sasnav_aiding_default(sasnav_aiding_params *ap)
+{
+    if (!ap) return;
+    memset(ap, 0, sizeof *ap);
+    const double deg = M_PI / 180.0;
+    ap->gyro = 1;
+    ap->dvl = 1;
+    ap->gyro_arw = 0.002 * deg / 60.0;   /* 0.002 deg/sqrt(h) in rad/sqrt(s) */
+    ap->gyro_bias = 0.003 * deg / 3600.0; /* 0.003 deg/h in rad/s */
+    ap->dvl_noise = 0.003;
+    ap->dvl_bias = 0.001;
+    ap->dvl_scale = 0.002;
+    ap->seed = 13;
+}
+
+int sasnav_simulate_aiding(const sasnav_aiding_params *ap, double speed, sasnav_run *run)
+{
+    if (!ap || !run) return sasnav_set_error(SASNAV_ERR_ARG, "NULL aiding argument");
+    if (!run->truth) return sasnav_set_error(SASNAV_ERR_ARG, "aiding needs the true trajectory");
+    if (!(speed > 0) || !isfinite(speed) || !(run->ping_spacing > 0))
+        return sasnav_set_error(SASNAV_ERR_ARG, "aiding needs a speed and a ping spacing > 0");
+    if (!(ap->gyro_arw >= 0) || !(ap->gyro_bias >= 0) || !(ap->dvl_noise >= 0) ||
+        !(ap->dvl_bias >= 0) || !(ap->dvl_scale >= 0) ||
+        !isfinite(ap->gyro_arw + ap->gyro_bias + ap->dvl_noise + ap->dvl_bias + ap->dvl_scale))
+        return sasnav_set_error(SASNAV_ERR_ARG, "aiding error parameters must be finite and >= 0");
+    if (!ap->gyro && !ap->dvl) return sasnav_set_error(SASNAV_ERR_ARG, "aiding without a sensor");
+    int rc = sasnav_run_alloc_aiding(run, ap->gyro, ap->dvl);
+    if (rc) return rc;
+    sasnav_aiding *a = run->aiding;
+    sasnav_rng rng;
+    sasnav_rng_seed(&rng, ap->seed);
+    /* Per-run errors first, then per-interval noise in ping order. */
+    double bg = ap->gyro_bias * sasnav_rng_normal(&rng);
+    double sv = ap->dvl_scale * sasnav_rng_normal(&rng);
+    double bv[2] = {ap->dvl_bias * sasnav_rng_normal(&rng), ap->dvl_bias * sasnav_rng_normal(&rng)};
+    double dt = run->ping_spacing / speed;
+    for (int p = 0; p < run->n_pings; p++) {
+        a->time[p] = p * dt;
+        /* The true interval ending at ping p (the first ping: the interval
+         * after it, as a stand-in). */
+        int i0 = p > 0 ? p - 1 : 0, i1 = p > 0 ? p : (run->n_pings > 1 ? 1 : 0);
+        sasnav_pose d = {0, 0, 0};
+        if (i1 != i0) d = sasnav_ping_displacement(&run->truth[i0], &run->truth[i1]);
+        double rate = d.theta / dt;
+        double c = cos(0.5 * d.theta), s = sin(0.5 * d.theta);
+        double v[2] = {(c * d.x + s * d.y) / dt, (-s * d.x + c * d.y) / dt};
+        double ng = sasnav_rng_normal(&rng), nv0 = sasnav_rng_normal(&rng), nv1 = sasnav_rng_normal(&rng);
+        if (ap->gyro) {
+            double sig_n = ap->gyro_arw / sqrt(dt);
+            a->yaw_rate[p] = rate + bg + sig_n * ng;
+            double sig = sqrt(sig_n * sig_n + ap->gyro_bias * ap->gyro_bias);
+            a->yaw_rate_sigma[p] = sig > 0 ? sig : 1e-12;
+        }
+        if (ap->dvl) {
+            double nv[2] = {nv0, nv1};
+            for (int k = 0; k < 2; k++) {
+                a->velocity[2 * p + k] = (1.0 + sv) * v[k] + bv[k] + ap->dvl_noise * nv[k];
+                double sc = ap->dvl_scale * v[k];
+                double sig = sqrt(ap->dvl_noise * ap->dvl_noise + ap->dvl_bias * ap->dvl_bias + sc * sc);
+                a->velocity_sigma[2 * p + k] = sig > 0 ? sig : 1e-12;
+            }
+        }
     }
     return SASNAV_OK;
 }

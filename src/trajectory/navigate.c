@@ -4,6 +4,7 @@
 #include "sasnav/error.h"
 #include "sasnav/trajectory.h"
 #include "core/clock.h"
+#include "trajectory/fuse.h"
 
 #include <math.h>
 #include <omp.h>
@@ -22,6 +23,11 @@ void sasnav_navigate_default_opts(sasnav_navigate_opts *opts)
     opts->link_sigma = (sasnav_pose){1e-3, 2e-5, 5e-5};
     opts->long_sigma = (sasnav_pose){2e-3, 4e-5, 1e-4};
     opts->align = 1;
+    opts->resolve = 1;
+    opts->use_aiding = 1;
+    opts->motion_sigma = (sasnav_pose){0.01, 0.01, 0.01};
+    opts->eta_weight = 20.0;
+    opts->aiding_gate = 5.0;
     opts->nthreads = 0;
     opts->progress = NULL;
     opts->progress_user = NULL;
@@ -82,6 +88,7 @@ typedef struct {
     sasnav_pair **estimators; /* subspace: one per worker thread, reused */
     int n_workers;            /* threads over pairs (1: the operators use the threads) */
     double t0;
+    double pc_spacing;        /* m, the array's phase-centre spacing */
 } nav_ctx;
 
 /* Estimates pair (p, q) into *np. Returns a fatal code, else SASNAV_OK
@@ -149,6 +156,11 @@ static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
     if (!sigma_ok(o->link_sigma) || !sigma_ok(o->long_sigma))
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: link standard deviations must be > 0");
     if (o->nthreads < 0) return sasnav_set_error(SASNAV_ERR_ARG, "navigate: nthreads < 0");
+    if (o->resolve && (!sigma_ok(o->motion_sigma) || !(o->eta_weight >= 0) ||
+                       !isfinite(o->eta_weight) || !(o->aiding_gate > 0)))
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "navigate: motion standard deviations must be > 0, the eta weight "
+                                ">= 0 and the aiding gate > 0");
     if (o->method == SASNAV_METHOD_SUBSPACE && !(run->range_of_interest > 0))
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: the run has no range of interest");
     if (!(run->tx_lag >= 0) || !isfinite(run->tx_lag))
@@ -253,6 +265,255 @@ static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
     return rc;
 }
 
+const char *sasnav_resolution_name(int resolution)
+{
+    switch (resolution) {
+    case SASNAV_RESOLVED_NONE: return "kept";
+    case SASNAV_RESOLVED_CANDIDATE: return "candidate";
+    case SASNAV_RESOLVED_REESTIMATED: return "re-estimated";
+    case SASNAV_RESOLVED_BRIDGED: return "bridged";
+    default: return "unknown";
+    }
+}
+
+static int usable(const sasnav_navigate_pair *np)
+{
+    return np->status == SASNAV_OK || np->status == SASNAV_ERR_NOT_CONVERGED;
+}
+
+/* Whether an estimate u agrees with the aiding v (standard deviations sa)
+ * in surge and yaw, the directions of a phase-centre slip: within a
+ * quarter of the slip (d / 4 of surge, d / (4 R) of yaw, d the
+ * phase-centre spacing, R the range of interest) plus `gate` standard
+ * deviations of the aiding. A quarter slip is far above the estimator's
+ * own spread (surge ~1 mm, yaw ~2e-4 rad, docs/estimator.md) and far
+ * below the slip itself. Components without aiding always agree. */
+static int agrees(const nav_ctx *ctx, sasnav_pose u, sasnav_pose v, sasnav_pose sa)
+{
+    double gate = ctx->opts->aiding_gate;
+    double d = ctx->pc_spacing, r = ctx->run->range_of_interest > 0 ? ctx->run->range_of_interest : 1.0;
+    if (isfinite(sa.x) && fabs(u.x - v.x) > 0.25 * d + gate * sa.x) return 0;
+    if (isfinite(sa.theta) && fabs(u.theta - v.theta) > 0.25 * d / r + gate * sa.theta) return 0;
+    return 1;
+}
+
+/* A new estimate of pair j from `start` (subspace only), kept when its eta
+ * is lower than the present one's (or the present one failed) and, with
+ * aiding, it agrees with the aiding. Returns a fatal code or OK; *taken
+ * tells whether it replaced the result. */
+static int reestimate(nav_ctx *ctx, sasnav_navigate_pair *np, sasnav_pose start, sasnav_pose a,
+                      sasnav_pose sa, int require_lower, int *taken)
+{
+    *taken = 0;
+    if (!ctx->estimators) return SASNAV_OK;
+    const sasnav_run *run = ctx->run;
+    sasnav_pair *est = ctx->estimators[0];
+    sasnav_pair_result r;
+    int rc = sasnav_pair_set_data(est, sasnav_run_ping(run, np->p), sasnav_run_ping(run, np->q),
+                                  np->nominal);
+    if (!rc) rc = sasnav_pair_estimate_from(est, start, &r);
+    if (fatal_code(rc)) return rc;
+    if (rc || r.status == SASNAV_ERR_NO_OVERLAP) return SASNAV_OK;
+    int better = !usable(np) || !require_lower || r.eta < np->result.eta;
+    if (!better || !agrees(ctx, r.error, a, sa)) return SASNAV_OK;
+    /* Keep the first estimate's candidates (what the data offered), the
+     * new estimate's values, time and cost added. */
+    sasnav_pair_result old = np->result;
+    r.n_candidates = old.n_candidates;
+    memcpy(r.candidates, old.candidates, sizeof r.candidates);
+    r.chosen = old.chosen;
+    r.ambiguity = old.ambiguity;
+    r.margin = old.margin;
+    r.seconds += old.seconds;
+    r.applications += old.applications;
+    r.evaluations += old.evaluations;
+    np->result = r;
+    np->status = r.status;
+    *taken = 1;
+    return SASNAV_OK;
+}
+
+/* Standard deviations of a pair's estimate in the smoother. */
+static sasnav_pose estimate_sigma(const nav_ctx *ctx, const sasnav_navigate_pair *np)
+{
+    sasnav_pose s = ctx->opts->link_sigma;
+    if (np->resolution == SASNAV_RESOLVED_BRIDGED || !usable(np) ||
+        np->verdict == SASNAV_VERDICT_FAILED || np->verdict == SASNAV_VERDICT_NO_OVERLAP)
+        return (sasnav_pose){INFINITY, INFINITY, INFINITY};
+    if (np->verdict == SASNAV_VERDICT_AMBIGUOUS) {
+        /* The surge-yaw slip direction is in doubt; sway is not. */
+        s.x *= 25.0;
+        s.theta *= 25.0;
+    }
+    return s;
+}
+
+/* Motion-model prediction of pair j: the mean of the nearest usable
+ * estimates before and after it (either alone at the run's ends). */
+static sasnav_pose motion_prediction(const sasnav_navigation *out, int n, int j)
+{
+    int lo = -1, hi = -1;
+    for (int i = j - 1; i >= 0 && lo < 0; i--)
+        if (out->pairs[i].verdict == SASNAV_VERDICT_OK && out->pairs[i].resolution != SASNAV_RESOLVED_BRIDGED) lo = i;
+    for (int i = j + 1; i < n && hi < 0; i++)
+        if (out->pairs[i].verdict == SASNAV_VERDICT_OK && out->pairs[i].resolution != SASNAV_RESOLVED_BRIDGED) hi = i;
+    if (lo < 0 && hi < 0) return out->pairs[j].result.error;
+    if (lo < 0) return out->pairs[hi].result.error;
+    if (hi < 0) return out->pairs[lo].result.error;
+    sasnav_pose a = out->pairs[lo].result.error, b = out->pairs[hi].result.error;
+    double t = (double)(j - lo) / (double)(hi - lo);
+    return (sasnav_pose){a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), a.theta + t * (b.theta - a.theta)};
+}
+
+/* Step 0 of navigate.h: joint choice, new estimates where needed, robust
+ * smoother. Consecutive pairs only. */
+static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
+{
+    const sasnav_run *run = ctx->run;
+    const sasnav_navigate_opts *o = ctx->opts;
+    int n = run->n_pings - 1;
+    for (int j = 0; j < out->n_pairs; j++) {
+        sasnav_navigate_pair *np = &out->pairs[j];
+        np->first_verdict = np->verdict = usable(np) ? np->result.verdict
+                                        : np->status == SASNAV_ERR_NO_OVERLAP ? SASNAV_VERDICT_NO_OVERLAP
+                                                                               : SASNAV_VERDICT_FAILED;
+        if (np->status == SASNAV_ERR_NOT_CONVERGED) np->verdict = np->first_verdict = SASNAV_VERDICT_FAILED;
+        np->fused = np->result.error;
+        np->aiding = (sasnav_pose){0, 0, 0};
+        np->aiding_sigma = (sasnav_pose){INFINITY, INFINITY, INFINITY};
+    }
+    if (!o->resolve || n < 1) return SASNAV_OK;
+    sasnav_pose *a = malloc(sizeof *a * (size_t)n), *sa = malloc(sizeof *sa * (size_t)n);
+    sasnav_pose *m = malloc(sizeof *m * (size_t)n), *sm = malloc(sizeof *sm * (size_t)n);
+    sasnav_pose *e = malloc(sizeof *e * (size_t)n);
+    fuse_option *pool = malloc(sizeof *pool * (size_t)n * SASNAV_PAIR_MAX_CANDIDATES);
+    fuse_option **opts = malloc(sizeof *opts * (size_t)n);
+    int *nopt = malloc(sizeof(int) * (size_t)n), *choice = malloc(sizeof(int) * (size_t)n);
+    int rc = SASNAV_OK;
+    if (!a || !sa || !m || !sm || !e || !pool || !opts || !nopt || !choice) {
+        rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the joint resolution");
+        goto done;
+    }
+    int with_aiding = o->use_aiding && run->aiding != NULL;
+    out->aiding_used = with_aiding;
+    if (with_aiding) fuse_aiding_errors(run, out->pairs, n, a, sa);
+    else
+        for (int j = 0; j < n; j++) {
+            a[j] = (sasnav_pose){0, 0, 0};
+            sa[j] = (sasnav_pose){INFINITY, INFINITY, INFINITY};
+        }
+    for (int j = 0; j < n; j++) {
+        out->pairs[j].aiding = a[j];
+        out->pairs[j].aiding_sigma = sa[j];
+    }
+    /* 1. The joint choice among each pair's distinct refined candidates
+     * (the chosen one at its final-stage value). Pairs without a usable
+     * estimate offer their nominal step (motion error 0) at no eta cost. */
+    for (int j = 0; j < n; j++) {
+        const sasnav_navigate_pair *np = &out->pairs[j];
+        const sasnav_pair_result *r = &np->result;
+        opts[j] = pool + (size_t)j * SASNAV_PAIR_MAX_CANDIDATES;
+        nopt[j] = 0;
+        if (!usable(np) || r->n_candidates == 0) {
+            opts[j][0] = (fuse_option){usable(np) ? r->error : (sasnav_pose){0, 0, 0}, NAN, -1};
+            nopt[j] = 1;
+            continue;
+        }
+        for (int k = 0; k < r->n_candidates; k++) {
+            const sasnav_pair_candidate *cd = &r->candidates[k];
+            if (!cd->refined || cd->same_as >= 0) continue;
+            opts[j][nopt[j]++] = (fuse_option){k == r->chosen ? r->error : cd->error, cd->eta, k};
+        }
+        if (nopt[j] == 0) opts[j][nopt[j]++] = (fuse_option){r->error, NAN, r->chosen};
+    }
+    rc = fuse_choose(n, opts, nopt, a, sa, o->motion_sigma, o->eta_weight, choice);
+    if (rc) goto done;
+    for (int j = 0; j < n && !rc; j++) {
+        sasnav_navigate_pair *np = &out->pairs[j];
+        const fuse_option *c = &opts[j][choice[j]];
+        if (!usable(np) || c->candidate < 0 || c->candidate == np->result.chosen) continue;
+        int taken = 0;
+        rc = reestimate(ctx, np, c->e, a[j], sa[j], 0, &taken);
+        if (!rc && taken) {
+            np->resolution = SASNAV_RESOLVED_CANDIDATE;
+            np->result.chosen = c->candidate;
+            np->verdict = np->result.verdict;
+        }
+    }
+    if (rc) goto done;
+    /* 2. Failed pairs and pairs that disagree with the aiding: a new
+     * estimate from the aiding's prediction (or the motion model's); where
+     * that does not give an estimate that is better and agrees, the pair
+     * is bridged. Estimates that agree with the aiding are confirmed. */
+    for (int j = 0; j < n && !rc; j++) {
+        sasnav_navigate_pair *np = &out->pairs[j];
+        int ok_alone = usable(np) && np->verdict != SASNAV_VERDICT_FAILED &&
+                       np->verdict != SASNAV_VERDICT_NO_OVERLAP;
+        int agree = agrees(ctx, np->result.error, a[j], sa[j]);
+        if (ok_alone && agree) {
+            if (with_aiding && np->verdict == SASNAV_VERDICT_AMBIGUOUS && isfinite(sa[j].x + sa[j].theta))
+                np->verdict = SASNAV_VERDICT_OK; /* the aiding settles the ambiguity */
+            continue;
+        }
+        if (np->status == SASNAV_ERR_NO_OVERLAP && !with_aiding) continue;
+        sasnav_pose start = np->result.error;
+        if (with_aiding) {
+            if (isfinite(sa[j].x)) start.x = a[j].x;
+            if (isfinite(sa[j].y)) start.y = a[j].y;
+            if (isfinite(sa[j].theta)) start.theta = a[j].theta;
+        } else {
+            start = motion_prediction(out, n, j);
+        }
+        int taken = 0;
+        if (np->status != SASNAV_ERR_NO_OVERLAP) rc = reestimate(ctx, np, start, a[j], sa[j], ok_alone, &taken);
+        if (rc) break;
+        if (taken) {
+            np->resolution = SASNAV_RESOLVED_REESTIMATED;
+            np->verdict = np->result.verdict;
+            if (with_aiding && np->verdict != SASNAV_VERDICT_NO_OVERLAP) np->verdict = SASNAV_VERDICT_OK;
+        } else if (!ok_alone || !agree) {
+            np->resolution = SASNAV_RESOLVED_BRIDGED;
+        }
+    }
+    if (rc) goto done;
+    /* 3. The robust smoother. */
+    for (int j = 0; j < n; j++) {
+        m[j] = out->pairs[j].result.error;
+        sm[j] = estimate_sigma(ctx, &out->pairs[j]);
+    }
+    rc = fuse_smooth(n, m, sm, a, sa, o->motion_sigma, 3.0, e);
+    if (rc) goto done;
+    for (int j = 0; j < n; j++) {
+        sasnav_navigate_pair *np = &out->pairs[j];
+        np->fused = e[j];
+        np->result.displacement = (sasnav_pose){np->nominal.x + e[j].x, np->nominal.y + e[j].y,
+                                                np->nominal.theta + e[j].theta};
+    }
+done:
+    free(a);
+    free(sa);
+    free(m);
+    free(sm);
+    free(e);
+    free(pool);
+    free(opts);
+    free(nopt);
+    free(choice);
+    return rc;
+}
+
+/* Counts and truth comparisons after the resolution. */
+static void pair_summary(const sasnav_run *run, sasnav_navigation *out)
+{
+    out->n_flagged = out->n_resolved = 0;
+    for (int j = 0; j < out->n_pairs; j++) {
+        sasnav_navigate_pair *np = &out->pairs[j];
+        if (np->verdict != SASNAV_VERDICT_OK || np->resolution == SASNAV_RESOLVED_BRIDGED) out->n_flagged++;
+        if (np->resolution != SASNAV_RESOLVED_NONE) out->n_resolved++;
+        if (run->truth) np->error = pose_sub(np->fused, np->truth);
+    }
+}
+
 /* Centroids from the pair displacements: the chain, or the least squares
  * over all links when long baselines were estimated. */
 static int solve_centroids(const nav_ctx *ctx, sasnav_navigation *out, sasnav_pose first)
@@ -345,6 +606,9 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
     if (!out->centroids || !out->nav) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     int rc = estimate_all(ctx, out);
     if (rc) return rc;
+    rc = resolve_pairs(ctx, out);
+    if (rc) return rc;
+    pair_summary(run, out);
     sasnav_pose first = sasnav_ping_centroid(&run->nav[0]);
     rc = solve_centroids(ctx, out, first);
     if (rc) return rc;
@@ -370,7 +634,8 @@ int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
     }
     int rc = check_input(run, opts);
     if (rc) return rc;
-    nav_ctx ctx = {run, opts, NULL, 1, sasnav_now_seconds()};
+    nav_ctx ctx = {run, opts, NULL, 1, sasnav_now_seconds(),
+                   run->array.n_rx > 1 ? 0.5 * fabs(run->array.rx_u[1] - run->array.rx_u[0]) : 0.025};
     out->method = opts->method;
     out->n_pings = run->n_pings;
     /* Threads: over pairs when there are several pairs (one estimator, or

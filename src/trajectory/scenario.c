@@ -25,6 +25,7 @@ static void base_paper(sasnav_scenario *sc)
     sasnav_ripple_default(&sc->ripples);
     sc->snr_db = 30.0;
     sc->noise_seed = 11;
+    sasnav_aiding_default(&sc->aiding);
 }
 
 int sasnav_scenario_preset(const char *name, sasnav_scenario *sc)
@@ -111,6 +112,12 @@ int sasnav_scenario_check(const sasnav_scenario *sc)
         return sasnav_set_error(SASNAV_ERR_ARG, "pair error must be finite and name ping 1..%d",
                                 t->n_pings - 1);
     if (isnan(sc->snr_db)) return sasnav_set_error(SASNAV_ERR_ARG, "SNR is NaN");
+    const sasnav_aiding_params *ap = &sc->aiding;
+    if (ap->enabled &&
+        (!(ap->gyro_arw >= 0) || !(ap->gyro_bias >= 0) || !(ap->dvl_noise >= 0) ||
+         !(ap->dvl_bias >= 0) || !(ap->dvl_scale >= 0) ||
+         !isfinite(ap->gyro_arw + ap->gyro_bias + ap->dvl_noise + ap->dvl_bias + ap->dvl_scale)))
+        return sasnav_set_error(SASNAV_ERR_ARG, "aiding error parameters must be finite and >= 0");
     if (sc->scene_kind == SASNAV_SCENE_POINTS) {
         if (sc->n_targets < 1 || sc->n_targets > SASNAV_MAX_TARGETS)
             return sasnav_set_error(SASNAV_ERR_ARG, "point scene needs 1..%d targets",

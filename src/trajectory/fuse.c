@@ -1,0 +1,175 @@
+/* Joint resolution and fusion of a run's consecutive pairs (fuse.h). */
+#include "trajectory/fuse.h"
+#include "sasnav/error.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static double comp(sasnav_pose p, int k) { return k == 0 ? p.x : k == 1 ? p.y : p.theta; }
+
+static void set_comp(sasnav_pose *p, int k, double v)
+{
+    if (k == 0) p->x = v;
+    else if (k == 1) p->y = v;
+    else p->theta = v;
+}
+
+void fuse_aiding_errors(const sasnav_run *run, const sasnav_navigate_pair *pairs, int n,
+                        sasnav_pose *a, sasnav_pose *sa)
+{
+    const sasnav_aiding *ad = run->aiding;
+    for (int j = 0; j < n; j++) {
+        a[j] = (sasnav_pose){0, 0, 0};
+        sa[j] = (sasnav_pose){INFINITY, INFINITY, INFINITY};
+        if (!ad) continue;
+        int q = pairs[j].q, p = pairs[j].p;
+        if (q != p + 1) continue;
+        double dt = ad->time[q] - ad->time[p];
+        sasnav_pose nom = pairs[j].nominal;
+        double dpsi = nom.theta + pairs[j].result.error.theta;
+        if (ad->yaw_rate) {
+            dpsi = ad->yaw_rate[q] * dt;
+            a[j].theta = dpsi - nom.theta;
+            sa[j].theta = ad->yaw_rate_sigma[q] * dt;
+        }
+        if (ad->velocity) {
+            /* The mean velocity is given in the frame at the interval's
+             * mean heading: rotate by half the interval's yaw into p's
+             * frame. */
+            double c = cos(0.5 * dpsi), s = sin(0.5 * dpsi);
+            double v0 = ad->velocity[2 * q], v1 = ad->velocity[2 * q + 1];
+            a[j].x = (c * v0 - s * v1) * dt - nom.x;
+            a[j].y = (s * v0 + c * v1) * dt - nom.y;
+            sa[j].x = ad->velocity_sigma[2 * q] * dt;
+            sa[j].y = ad->velocity_sigma[2 * q + 1] * dt;
+        }
+    }
+}
+
+/* 1/2 sum_k ((u_k - v_k) / s_k)^2 over the components with finite s. */
+static double half_chi2(sasnav_pose u, sasnav_pose v, sasnav_pose s)
+{
+    double c = 0;
+    for (int k = 0; k < 3; k++) {
+        double sk = comp(s, k);
+        if (!isfinite(sk)) continue;
+        double r = (comp(u, k) - comp(v, k)) / sk;
+        c += 0.5 * r * r;
+    }
+    return c;
+}
+
+int fuse_choose(int n, fuse_option *const *opts, const int *nopt, const sasnav_pose *a,
+                const sasnav_pose *sa, sasnav_pose motion, double eta_weight, int *choice)
+{
+    if (n < 1) return SASNAV_OK;
+    int width = 1;
+    for (int j = 0; j < n; j++)
+        if (nopt[j] > width) width = nopt[j];
+    double *cost = malloc(sizeof(double) * (size_t)n * (size_t)width);
+    int *from = malloc(sizeof(int) * (size_t)n * (size_t)width);
+    if (!cost || !from) {
+        free(cost);
+        free(from);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the joint resolution");
+    }
+    for (int j = 0; j < n; j++) {
+        double eta_min = HUGE_VAL;
+        for (int c = 0; c < nopt[j]; c++)
+            if (opts[j][c].eta < eta_min) eta_min = opts[j][c].eta;
+        for (int c = 0; c < nopt[j]; c++) {
+            const fuse_option *o = &opts[j][c];
+            double u = half_chi2(o->e, a[j], sa[j]);
+            if (eta_min > 0 && o->eta > 0 && isfinite(o->eta)) u += eta_weight * log(o->eta / eta_min);
+            double best = 0;
+            int arg = -1;
+            if (j > 0) {
+                best = HUGE_VAL;
+                for (int b = 0; b < nopt[j - 1]; b++) {
+                    double t = cost[(size_t)(j - 1) * width + b] + half_chi2(o->e, opts[j - 1][b].e, motion);
+                    if (t < best) {
+                        best = t;
+                        arg = b;
+                    }
+                }
+            }
+            cost[(size_t)j * width + c] = best + u;
+            from[(size_t)j * width + c] = arg;
+        }
+    }
+    int c = 0;
+    for (int b = 1; b < nopt[n - 1]; b++)
+        if (cost[(size_t)(n - 1) * width + b] < cost[(size_t)(n - 1) * width + c]) c = b;
+    for (int j = n - 1; j >= 0; j--) {
+        choice[j] = c;
+        if (j > 0) c = from[(size_t)j * width + c];
+    }
+    free(cost);
+    free(from);
+    return SASNAV_OK;
+}
+
+/* Solves the symmetric tridiagonal system (diag d, off-diagonal o between
+ * i and i + 1) in place (Thomas algorithm; d is positive definite here). */
+static void tridiag_solve(int n, double *d, double *o, double *b)
+{
+    for (int i = 1; i < n; i++) {
+        double f = o[i - 1] / d[i - 1];
+        d[i] -= f * o[i - 1];
+        b[i] -= f * b[i - 1];
+    }
+    b[n - 1] /= d[n - 1];
+    for (int i = n - 2; i >= 0; i--) b[i] = (b[i] - o[i] * b[i + 1]) / d[i];
+}
+
+int fuse_smooth(int n, const sasnav_pose *m, const sasnav_pose *sm, const sasnav_pose *a,
+                const sasnav_pose *sa, sasnav_pose motion, double huber, sasnav_pose *e)
+{
+    if (n < 1) return SASNAV_OK;
+    double *d = malloc(sizeof(double) * (size_t)n), *o = malloc(sizeof(double) * (size_t)n);
+    double *b = malloc(sizeof(double) * (size_t)n), *w = malloc(sizeof(double) * (size_t)n);
+    if (!d || !o || !b || !w) {
+        free(d);
+        free(o);
+        free(b);
+        free(w);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the trajectory smoother");
+    }
+    /* A very weak prior on the motion error itself (1 m, 1 rad) keeps a
+     * component that nothing observes at the nominal step. */
+    const double prior_w = 1.0;
+    for (int k = 0; k < 3; k++) {
+        double sk = comp(motion, k);
+        double wm = isfinite(sk) && sk > 0 ? 1.0 / (sk * sk) : 0.0;
+        for (int j = 0; j < n; j++) w[j] = 1.0;
+        for (int iter = 0; iter < 5; iter++) {
+            for (int j = 0; j < n; j++) {
+                double s1 = comp(sm[j], k), s2 = comp(sa[j], k);
+                double w1 = isfinite(s1) ? w[j] / (s1 * s1) : 0.0;
+                double w2 = isfinite(s2) ? 1.0 / (s2 * s2) : 0.0;
+                d[j] = prior_w + w1 + w2 + (j > 0 ? wm : 0.0) + (j + 1 < n ? wm : 0.0);
+                o[j] = -wm;
+                b[j] = w1 * comp(m[j], k) + w2 * comp(a[j], k);
+            }
+            tridiag_solve(n, d, o, b);
+            /* Huber weights of the estimates' residuals. */
+            int changed = 0;
+            for (int j = 0; j < n; j++) {
+                set_comp(&e[j], k, b[j]);
+                double s1 = comp(sm[j], k);
+                if (!isfinite(s1) || !(huber > 0)) continue;
+                double r = fabs(comp(m[j], k) - b[j]) / s1;
+                double nw = r > huber ? huber / r : 1.0;
+                if (fabs(nw - w[j]) > 1e-3) changed = 1;
+                w[j] = nw;
+            }
+            if (!changed) break;
+        }
+    }
+    free(d);
+    free(o);
+    free(b);
+    free(w);
+    return SASNAV_OK;
+}

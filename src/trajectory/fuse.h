@@ -1,0 +1,43 @@
+/* Joint resolution and fusion of the consecutive pairs of a run
+ * (sasnav_navigate; docs/navigation.md, "Resolution over the run").
+ * Internal to the library. All poses are motion errors (displacement minus
+ * nominal displacement: surge, sway, yaw) of the consecutive pairs
+ * j = 0..n-1 (pings j, j + 1). */
+#ifndef SASNAV_TRAJECTORY_FUSE_H
+#define SASNAV_TRAJECTORY_FUSE_H
+
+#include "sasnav/navigate.h"
+
+/* The aiding measurement of each consecutive pair as a motion error, with
+ * its standard deviations (+inf for a component without measurement: no
+ * gyro, no DVL, or no aiding at all). `yaw_hint[j]` is the pair's yaw
+ * motion error to rotate DVL velocities with when there is no gyro. */
+void fuse_aiding_errors(const sasnav_run *run, const sasnav_navigate_pair *pairs, int n,
+                        sasnav_pose *a, sasnav_pose *sa);
+
+/* One option of a pair in the joint choice. */
+typedef struct {
+    sasnav_pose e;  /* motion error */
+    double eta;     /* level-1 eta (the data's cost) */
+    int candidate;  /* index in the pair's candidates[] */
+} fuse_option;
+
+/* Viterbi choice of one option per pair: minimises
+ *   sum_j [ w ln(eta / min eta_j) + 1/2 |(e - a_j) / sa_j|^2 ]
+ *   + sum_j 1/2 |(e_{j+1} - e_j) / motion|^2.
+ * opts[j][0..nopt[j]-1]; writes choice[j]. Returns SASNAV_ERR_NOMEM or OK. */
+int fuse_choose(int n, fuse_option *const *opts, const int *nopt, const sasnav_pose *a,
+                const sasnav_pose *sa, sasnav_pose motion, double eta_weight, int *choice);
+
+/* Robust smoother per component (iteratively reweighted least squares,
+ * Huber weights on the estimates' residuals):
+ *   min sum_j rho((e_j - m_j) / sm_j) + |(e_j - a_j) / sa_j|^2
+ *       + |(e_{j+1} - e_j) / motion|^2,
+ * a tridiagonal system per component. m, sm: the estimates and their
+ * standard deviations (+inf: no estimate). Writes e. Returns
+ * SASNAV_ERR_NOMEM, SASNAV_ERR_GEOMETRY (a component observed by nothing:
+ * cannot happen with a finite motion sigma and n >= 1 finite term) or OK. */
+int fuse_smooth(int n, const sasnav_pose *m, const sasnav_pose *sm, const sasnav_pose *a,
+                const sasnav_pose *sa, sasnav_pose motion, double huber, sasnav_pose *e);
+
+#endif
