@@ -13,7 +13,7 @@
 #include <unistd.h>
 
 static const char *help =
-    "usage: sasnav navigate run.h5 [--method subspace|dpca] [--long-baselines]\n"
+    "usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]\n"
     "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
     "                       [--cross-extent M] [--range-extent M]\n"
     "                       [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]\n"
@@ -38,7 +38,8 @@ static const char *help =
     "without a usable estimate is bridged by the aiding and the motion model\n"
     "and reported; the exit status stays 0.\n"
     "\n"
-    "  --method M        subspace (default; subspace intersection) or dpca\n"
+    "  --method M        subspace (default; subspace intersection), dpca, or\n"
+    "                    aiding (the run's gyro / DVL alone: dead reckoning)\n"
     "  --long-baselines  also estimate pairs (p, p+2) and combine all by least\n"
     "                    squares (skipped where they share < 2 phase centres)\n"
     "  --k K, --i I      CGLS and alternating-projection iterations of the\n"
@@ -131,7 +132,9 @@ static void print_json(const char *input, const sasnav_navigation *nav)
     int n = nav->n_pings;
     json_object_set_new(root, "input", json_string(input));
     json_object_set_new(root, "method",
-                        json_string(nav->method == SASNAV_METHOD_DPCA ? "dpca" : "subspace"));
+                        json_string(nav->method == SASNAV_METHOD_DPCA     ? "dpca"
+                                    : nav->method == SASNAV_METHOD_AIDING ? "aiding"
+                                                                          : "subspace"));
     json_object_set_new(root, "n_pings", json_integer(n));
     json_object_set_new(root, "failed_pairs", json_integer(nav->n_failed));
     json_object_set_new(root, "flagged_pairs", json_integer(nav->n_flagged));
@@ -256,7 +259,8 @@ int cmd_navigate(int argc, char **argv)
         case 'm':
             if (!strcmp(optarg, "subspace")) no.method = SASNAV_METHOD_SUBSPACE;
             else if (!strcmp(optarg, "dpca")) no.method = SASNAV_METHOD_DPCA;
-            else return cli_fail("navigate", 0, "--method needs subspace or dpca (got '%s')", optarg);
+            else if (!strcmp(optarg, "aiding")) no.method = SASNAV_METHOD_AIDING;
+            else return cli_fail("navigate", 0, "--method needs subspace, dpca or aiding (got '%s')", optarg);
             break;
         case 'L': no.long_baselines = 1; break;
         case 'k':

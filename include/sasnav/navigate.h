@@ -71,7 +71,10 @@ extern "C" {
 
 typedef enum {
     SASNAV_METHOD_SUBSPACE = 0, /* subspace intersection (paper Section III) */
-    SASNAV_METHOD_DPCA = 1      /* DPCA baseline (Bellettini & Pinto 2002) */
+    SASNAV_METHOD_DPCA = 1,     /* DPCA baseline (Bellettini & Pinto 2002) */
+    SASNAV_METHOD_AIDING = 2    /* no pair estimates: the run's aiding
+                                   measurements and the motion model alone
+                                   (dead reckoning; needs aiding) */
 } sasnav_method;
 
 /* What the progress callback is told. Called once before the first pair
@@ -103,6 +106,8 @@ typedef enum {
 const char *sasnav_resolution_name(int resolution);
 
 typedef void (*sasnav_progress_fn)(const sasnav_navigate_progress *progress, void *user);
+
+typedef struct sasnav_navigation sasnav_navigation;
 
 typedef struct {
     sasnav_method method;     /* default SASNAV_METHOD_SUBSPACE */
@@ -140,6 +145,11 @@ typedef struct {
                                  estimated again from the aiding (default 5) */
     int nthreads;             /* OpenMP threads of the estimators (0 = OpenMP
                                  default); copied into pair and dpca */
+    const sasnav_navigation *reuse; /* a navigation of the same run by the
+                                 same method and pair options: its pairs'
+                                 first estimates (first_result) are used
+                                 instead of estimating them again, e.g. to
+                                 compare fusion settings (default NULL) */
     sasnav_progress_fn progress; /* may be NULL */
     void *progress_user;      /* passed to progress */
 } sasnav_navigate_opts;
@@ -170,10 +180,12 @@ typedef struct {
     sasnav_pose aiding_sigma;  /* its standard deviations (+inf: none) */
     sasnav_pose fused;         /* fused motion error (what the trajectory
                                   is built from) */
+    sasnav_pair_result first_result; /* the estimate before the resolution */
+    int first_status;          /* its status */
 } sasnav_navigate_pair;
 
 /* Output of sasnav_navigate; release the arrays with sasnav_navigation_free. */
-typedef struct {
+struct sasnav_navigation {
     sasnav_method method;
     int n_pings;
     int n_pairs;                  /* entries of pairs[]: the n_pings - 1
@@ -216,7 +228,7 @@ typedef struct {
     double pairs_per_second;      /* n_pairs / seconds_estimation */
     int threads_over_pairs;       /* pairs estimated concurrently (1: one
                                      after the other) */
-} sasnav_navigation;
+};
 
 /* Navigates `run` (at least 2 pings, validated with sasnav_run_check).
  * `opts` may be NULL (defaults). `out` is overwritten (not freed first).

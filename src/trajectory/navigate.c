@@ -106,7 +106,27 @@ static int estimate_pair(nav_ctx *ctx, sasnav_pair *estimator, int p, int q,
         np->truth = pose_sub(d, np->nominal);
     }
     int rc;
-    if (ctx->opts->method == SASNAV_METHOD_DPCA) {
+    const sasnav_navigation *reuse = ctx->opts->reuse;
+    if (reuse) {
+        /* The earlier estimate of the same pair. */
+        const sasnav_navigate_pair *old = NULL;
+        for (int j = 0; j < reuse->n_pairs && !old; j++)
+            if (reuse->pairs[j].p == p && reuse->pairs[j].q == q) old = &reuse->pairs[j];
+        if (!old) return sasnav_set_error(SASNAV_ERR_ARG, "navigate: the reused navigation has no pair %d-%d", p, q);
+        np->result = old->first_result;
+        np->status = old->first_status;
+        np->first_result = np->result;
+        np->first_status = np->status;
+        if (run->truth) np->error = pose_sub(np->result.error, np->truth);
+        return SASNAV_OK;
+    }
+    if (ctx->opts->method == SASNAV_METHOD_AIDING) {
+        rc = SASNAV_OK;
+        np->result.status = SASNAV_OK;
+        np->result.verdict = SASNAV_VERDICT_OK;
+        np->result.displacement = np->nominal;
+        np->result.margin = INFINITY;
+    } else if (ctx->opts->method == SASNAV_METHOD_DPCA) {
         sasnav_dpca_opts o = ctx->opts->dpca;
         o.nthreads = ctx->opts->nthreads;
         rc = sasnav_dpca_estimate(run, p, q, &o, &np->result, NULL);
@@ -131,6 +151,8 @@ static int estimate_pair(nav_ctx *ctx, sasnav_pair *estimator, int p, int q,
         np->status = np->result.status;
     }
     if (run->truth) np->error = pose_sub(np->result.error, np->truth);
+    np->first_result = np->result;
+    np->first_status = np->status;
     return SASNAV_OK;
 }
 
@@ -151,8 +173,16 @@ static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
     if (run->n_pings < 2)
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: the run needs at least 2 pings (has %d)",
                                 run->n_pings);
-    if (o->method != SASNAV_METHOD_SUBSPACE && o->method != SASNAV_METHOD_DPCA)
+    if (o->method != SASNAV_METHOD_SUBSPACE && o->method != SASNAV_METHOD_DPCA &&
+        o->method != SASNAV_METHOD_AIDING)
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: unknown method %d", (int)o->method);
+    if (o->method == SASNAV_METHOD_AIDING && (!run->aiding || !o->use_aiding || !o->resolve))
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "navigate: navigation by aiding alone needs a run with aiding "
+                                "measurements (and aiding and resolution enabled)");
+    if (o->reuse && (o->reuse->method != o->method || o->reuse->n_pings != run->n_pings || !o->reuse->pairs))
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "navigate: the navigation to reuse is of another method or run");
     if (!sigma_ok(o->link_sigma) || !sigma_ok(o->long_sigma))
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: link standard deviations must be > 0");
     if (o->nthreads < 0) return sasnav_set_error(SASNAV_ERR_ARG, "navigate: nthreads < 0");
@@ -337,6 +367,7 @@ static int reestimate(nav_ctx *ctx, sasnav_navigate_pair *np, sasnav_pose start,
 static sasnav_pose estimate_sigma(const nav_ctx *ctx, const sasnav_navigate_pair *np)
 {
     sasnav_pose s = ctx->opts->link_sigma;
+    if (ctx->opts->method == SASNAV_METHOD_AIDING) return (sasnav_pose){INFINITY, INFINITY, INFINITY};
     if (np->resolution == SASNAV_RESOLVED_BRIDGED || !usable(np) ||
         np->verdict == SASNAV_VERDICT_FAILED || np->verdict == SASNAV_VERDICT_NO_OVERLAP)
         return (sasnav_pose){INFINITY, INFINITY, INFINITY};
@@ -445,7 +476,7 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
      * estimate from the aiding's prediction (or the motion model's); where
      * that does not give an estimate that is better and agrees, the pair
      * is bridged. Estimates that agree with the aiding are confirmed. */
-    for (int j = 0; j < n && !rc; j++) {
+    for (int j = 0; j < n && !rc && o->method != SASNAV_METHOD_AIDING; j++) {
         sasnav_navigate_pair *np = &out->pairs[j];
         int ok_alone = usable(np) && np->verdict != SASNAV_VERDICT_FAILED &&
                        np->verdict != SASNAV_VERDICT_NO_OVERLAP;

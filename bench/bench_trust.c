@@ -1,0 +1,198 @@
+/* Monte Carlo study of trustworthy navigation (docs/navigation.md,
+ * "Trust: Monte Carlo"): seeded paper-trajectory runs with simulated
+ * aiding, navigated five ways on the same data:
+ *   paper      subspace pair estimates, each pair alone (--no-resolve)
+ *   subspace   subspace, joint resolution over the run, no aiding
+ *   dpca       DPCA baseline, joint resolution, no aiding
+ *   aiding     the gyro and DVL alone (dead reckoning)
+ *   fused      subspace + aiding (the pair estimates of 'subspace' reused)
+ *
+ * usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE]
+ *
+ * Seeds follow `sasnav simulate --seed S --aiding` (scene 3S+1, trajectory
+ * 3S+2, noise 3S+3, aiding 3S+4). Prints one line per run and method, then
+ * per method: slips (a pair's fused motion error off by more than a
+ * quarter phase-centre spacing in surge or 2e-3 rad in yaw), unflagged
+ * slips (slips whose pair is "ok" and not bridged), flagged pairs, final
+ * cumulative sway / surge / yaw errors and rms cumulative sway (median and
+ * 95th percentile of the absolute values over the runs), and the runs with
+ * final sway within lambda/25. --pairs FILE writes one line per subspace
+ * pair (first estimate: error, eta, margin, verdict, candidates) for the
+ * calibration of the verdict. */
+#include "sasnav/error.h"
+#include "sasnav/navigate.h"
+#include "sasnav/sim.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum { M_PAPER, M_SUB, M_DPCA, M_AID, M_FUSED, N_METHODS };
+static const char *const names[N_METHODS] = {"paper", "subspace", "dpca", "aiding", "fused"};
+
+typedef struct {
+    double *final_sway, *final_surge, *final_yaw, *rms_sway;
+    int slips, unflagged, flagged, pairs, within;
+} stats;
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Percentile (0..100) of n values by linear interpolation (sorts v). */
+static double percentile(double *v, int n, double pc)
+{
+    if (n < 1) return NAN;
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    double r = pc / 100.0 * (n - 1);
+    int i = (int)floor(r);
+    if (i >= n - 1) return v[n - 1];
+    return v[i] + (r - i) * (v[i + 1] - v[i]);
+}
+
+int main(int argc, char **argv)
+{
+    long s0 = 1001, ns = 10;
+    double snr = 30.0;
+    int threads = 0;
+    const char *pairs_path = NULL;
+    for (int a = 1; a < argc; a++) {
+        if (!strcmp(argv[a], "--seeds") && a + 2 < argc) {
+            s0 = atol(argv[++a]);
+            ns = atol(argv[++a]);
+        } else if (!strcmp(argv[a], "--snr") && a + 1 < argc) {
+            a++;
+            snr = !strcmp(argv[a], "inf") ? INFINITY : atof(argv[a]);
+        } else if (!strcmp(argv[a], "--threads") && a + 1 < argc) {
+            threads = atoi(argv[++a]);
+        } else if (!strcmp(argv[a], "--pairs") && a + 1 < argc) {
+            pairs_path = argv[++a];
+        } else {
+            fprintf(stderr, "usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE]\n");
+            return 2;
+        }
+    }
+    if (ns < 1 || threads < 0) return 2;
+    FILE *pf = pairs_path ? fopen(pairs_path, "w") : NULL;
+    if (pairs_path && !pf) {
+        fprintf(stderr, "bench_trust: cannot write %s\n", pairs_path);
+        return 1;
+    }
+    const double lambda = 1500.0 / 300e3, d = 0.025, yaw_slip = 2e-3;
+    stats st[N_METHODS];
+    memset(st, 0, sizeof st);
+    for (int m = 0; m < N_METHODS; m++) {
+        st[m].final_sway = calloc((size_t)ns, sizeof(double));
+        st[m].final_surge = calloc((size_t)ns, sizeof(double));
+        st[m].final_yaw = calloc((size_t)ns, sizeof(double));
+        st[m].rms_sway = calloc((size_t)ns, sizeof(double));
+        if (!st[m].final_sway || !st[m].final_surge || !st[m].final_yaw || !st[m].rms_sway) return 1;
+    }
+    printf("paper-trajectory with aiding, SNR %g dB, seeds %ld..%ld\n", snr, s0, s0 + ns - 1);
+    printf("%6s %-9s %6s %9s %8s %14s %14s %12s %10s\n", "seed", "method", "slips", "unflagged",
+           "flagged", "final sway mm", "final surge mm", "final yaw", "s/pair");
+    for (long s = s0; s < s0 + ns; s++) {
+        int r = (int)(s - s0);
+        sasnav_scenario sc;
+        sasnav_scenario_preset("paper-trajectory", &sc);
+        sc.snr_db = snr;
+        sc.ripples.seed = (uint64_t)s * 3 + 1;
+        sc.traj.seed = (uint64_t)s * 3 + 2;
+        sc.noise_seed = (uint64_t)s * 3 + 3;
+        sc.aiding.enabled = 1;
+        sc.aiding.seed = (uint64_t)s * 3 + 4;
+        sasnav_run *run = NULL;
+        if (sasnav_simulate(&sc, NULL, NULL, &run)) {
+            fprintf(stderr, "simulate: %s\n", sasnav_last_error());
+            return 1;
+        }
+        sasnav_navigation nav[N_METHODS];
+        memset(nav, 0, sizeof nav);
+        int order[N_METHODS] = {M_SUB, M_PAPER, M_FUSED, M_DPCA, M_AID};
+        for (int k = 0; k < N_METHODS; k++) {
+            int m = order[k];
+            sasnav_navigate_opts o;
+            sasnav_navigate_default_opts(&o);
+            o.nthreads = threads;
+            o.use_aiding = m == M_FUSED || m == M_AID;
+            o.resolve = m != M_PAPER;
+            if (m == M_PAPER || m == M_FUSED) o.reuse = &nav[M_SUB];
+            if (m == M_DPCA) o.method = SASNAV_METHOD_DPCA;
+            if (m == M_AID) o.method = SASNAV_METHOD_AIDING;
+            if (sasnav_navigate(run, &o, &nav[m])) {
+                fprintf(stderr, "navigate (%s, seed %ld): %s\n", names[m], s, sasnav_last_error());
+                return 1;
+            }
+        }
+        for (int m = 0; m < N_METHODS; m++) {
+            const sasnav_navigation *nv = &nav[m];
+            int slips = 0, unflagged = 0, flagged = 0;
+            for (int j = 0; j < nv->n_pairs; j++) {
+                const sasnav_navigate_pair *np = &nv->pairs[j];
+                int slip = fabs(np->error.x) > 0.25 * d || fabs(np->error.theta) > yaw_slip;
+                int flag = m == M_PAPER ? np->first_verdict != SASNAV_VERDICT_OK
+                                        : np->verdict != SASNAV_VERDICT_OK ||
+                                              np->resolution == SASNAV_RESOLVED_BRIDGED;
+                slips += slip;
+                unflagged += slip && !flag;
+                flagged += flag;
+            }
+            sasnav_pose f = nv->cumulative[nv->n_pings - 1];
+            st[m].final_sway[r] = fabs(f.y);
+            st[m].final_surge[r] = fabs(f.x);
+            st[m].final_yaw[r] = fabs(f.theta);
+            st[m].rms_sway[r] = nv->rms_cumulative.y;
+            st[m].slips += slips;
+            st[m].unflagged += unflagged;
+            st[m].flagged += flagged;
+            st[m].pairs += nv->n_pairs;
+            st[m].within += fabs(f.y) <= lambda / 25;
+            printf("%6ld %-9s %6d %9d %8d %+14.4f %+14.3f %+12.3e %10.2f\n", s, names[m], slips,
+                   unflagged, flagged, 1e3 * f.y, 1e3 * f.x, f.theta, nv->seconds_per_pair);
+        }
+        if (pf) {
+            const sasnav_navigation *nv = &nav[M_SUB];
+            for (int j = 0; j < nv->n_pairs; j++) {
+                const sasnav_navigate_pair *np = &nv->pairs[j];
+                const sasnav_pair_result *pr = &np->first_result;
+                sasnav_pose e = {pr->error.x - np->truth.x, pr->error.y - np->truth.y,
+                                 pr->error.theta - np->truth.theta};
+                fprintf(pf,
+                        "%g %ld %d err %+.6f %+.7f %+.7f eta %.4f zeta %.4f overlap %.3f margin %.4f "
+                        "ambiguity %.3f verdict %s candidates %d resolution %s fused %+.6f %+.7f %+.7f\n",
+                        snr, s, np->p, e.x, e.y, e.theta, pr->eta, pr->zeta, pr->overlap, pr->margin,
+                        pr->ambiguity, sasnav_verdict_name(pr->verdict), pr->n_candidates,
+                        sasnav_resolution_name(np->resolution), np->error.x, np->error.y,
+                        np->error.theta);
+            }
+            fflush(pf);
+        }
+        fflush(stdout);
+        for (int m = 0; m < N_METHODS; m++) sasnav_navigation_free(&nav[m]);
+        sasnav_run_free(run);
+    }
+    if (pf) fclose(pf);
+    printf("\n| method | slips | unflagged slips | flagged pairs | final sway mm, median / p95 | "
+           "final surge mm | final yaw rad | rms sway mm | runs within lambda/25 |\n"
+           "|---|---|---|---|---|---|---|---|---|\n");
+    for (int m = 0; m < N_METHODS; m++) {
+        stats *t = &st[m];
+        int n = (int)ns;
+        double sw50 = percentile(t->final_sway, n, 50), sw95 = percentile(t->final_sway, n, 95);
+        double su50 = percentile(t->final_surge, n, 50), su95 = percentile(t->final_surge, n, 95);
+        double y50 = percentile(t->final_yaw, n, 50), y95 = percentile(t->final_yaw, n, 95);
+        double r50 = percentile(t->rms_sway, n, 50), r95 = percentile(t->rms_sway, n, 95);
+        printf("| %s | %d of %d | %d | %d | %.3f / %.3f | %.2f / %.2f | %.2e / %.2e | %.3f / %.3f | "
+               "%d of %d |\n",
+               names[m], t->slips, t->pairs, t->unflagged, t->flagged, 1e3 * sw50, 1e3 * sw95,
+               1e3 * su50, 1e3 * su95, y50, y95, 1e3 * r50, 1e3 * r95, t->within, n);
+        free(t->final_sway);
+        free(t->final_surge);
+        free(t->final_yaw);
+        free(t->rms_sway);
+    }
+    return 0;
+}
