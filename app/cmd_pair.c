@@ -243,6 +243,21 @@ int cmd_pair(int argc, char **argv)
         const char *st = out[0].rc ? sasnav_strerror(out[0].rc)
                          : r0->status == SASNAV_OK ? "converged" : sasnav_strerror(r0->status);
         json_object_set_new(root, "status", json_string(st));
+        json_object_set_new(root, "verdict", json_string(out[0].rc ? "failed" : sasnav_verdict_name(r0->verdict)));
+        json_object_set_new(root, "margin", isfinite(r0->margin) ? json_real(r0->margin) : json_null());
+        json_t *cands = json_array();
+        for (int kc = 0; kc < r0->n_candidates; kc++) {
+            const sasnav_pair_candidate *c = &r0->candidates[kc];
+            json_t *o = pose_json(c->error);
+            json_object_set_new(o, "zeta_scan", isfinite(c->zeta_scan) ? json_real(c->zeta_scan) : json_null());
+            json_object_set_new(o, "zeta", isfinite(c->zeta) ? json_real(c->zeta) : json_null());
+            json_object_set_new(o, "eta", isfinite(c->eta) ? json_real(c->eta) : json_null());
+            json_object_set_new(o, "refined", json_boolean(c->refined));
+            json_object_set_new(o, "chosen", json_boolean(kc == r0->chosen));
+            if (c->same_as >= 0) json_object_set_new(o, "same_as", json_integer(c->same_as));
+            json_array_append_new(cands, o);
+        }
+        json_object_set_new(root, "candidates", cands);
         if (nsub > 1) {
             json_t *arr = json_array();
             for (int s = 0; s < nsub; s++) {
@@ -295,6 +310,21 @@ int cmd_pair(int argc, char **argv)
                r->seconds_global, r->applications_global, r->seconds_zeta, r->applications_zeta,
                r->seconds_eta, r->applications_eta, r->seconds_final, r->applications_final,
                r->evaluations_final);
+        for (int kc = 0; kc < r->n_candidates; kc++) {
+            const sasnav_pair_candidate *c = &r->candidates[kc];
+            printf("candidate %d%s  surge %+8.3f mm  sway %+9.4f mm  yaw %+.4e rad  zeta(scan) %.4f", kc,
+                   kc == r->chosen ? "*" : " ", 1e3 * c->error.x, 1e3 * c->error.y, c->error.theta,
+                   c->zeta_scan);
+            if (c->refined) printf("  eta(level 1) %.4f", c->eta);
+            if (c->same_as >= 0) printf("  (= candidate %d)", c->same_as);
+            printf("\n");
+        }
+        printf("verdict %s", sasnav_verdict_name(r->verdict));
+        if (isfinite(r->margin)) printf(" (eta margin to the next candidate %.3f)", r->margin);
+        printf("\n");
+        if (r->verdict != SASNAV_VERDICT_OK)
+            fprintf(stderr, "sasnav pair: warning: pings %ld-%ld: the estimate is %s (docs/estimator.md, \"Verdict\")\n",
+                    p, q, sasnav_verdict_name(r->verdict));
     }
     free(out);
     return 0;

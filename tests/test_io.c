@@ -383,6 +383,99 @@ static void poke(hid_t f, const char *name, hid_t memtype, hsize_t index, int ra
     H5Dclose(d);
 }
 
+/* Aiding measurements (docs/format.md, "/aiding"): a bit-exact round trip
+ * of both sensors and of the gyro alone, +inf standard deviations kept,
+ * and bad aiding refused with a message naming it: NaN, a wrong length, a
+ * negative or zero standard deviation, times that do not increase, values
+ * without their standard deviations. */
+static int aiding_identical(const sasnav_aiding *a, const sasnav_aiding *b, int n)
+{
+    if (!a || !b) return 0;
+    if (memcmp(a->time, b->time, sizeof(double) * n)) return 0;
+    if (!a->yaw_rate != !b->yaw_rate || !a->velocity != !b->velocity) return 0;
+    if (a->yaw_rate && (memcmp(a->yaw_rate, b->yaw_rate, sizeof(double) * n) ||
+                        memcmp(a->yaw_rate_sigma, b->yaw_rate_sigma, sizeof(double) * n)))
+        return 0;
+    if (a->velocity && (memcmp(a->velocity, b->velocity, sizeof(double) * 2 * n) ||
+                        memcmp(a->velocity_sigma, b->velocity_sigma, sizeof(double) * 2 * n)))
+        return 0;
+    return 1;
+}
+
+static void test_aiding(void)
+{
+    for (int dvl = 1; dvl >= 0; dvl--) {
+        sasnav_run *run = random_run(300 + dvl, 6, 3, 16, 1), *back = NULL;
+        if (!run) continue;
+        CHECK_OK(sasnav_run_alloc_aiding(run, 1, dvl));
+        sasnav_aiding *a = run->aiding;
+        for (int p = 0; a && p < run->n_pings; p++) {
+            a->time[p] = 0.1 * p + rng_uniform(0, 1e-3);
+            a->yaw_rate[p] = rng_uniform(-0.025, 0.025);
+            a->yaw_rate_sigma[p] = rng_uniform(1e-6, 2e-6);
+            for (int k = 0; dvl && k < 2; k++) {
+                a->velocity[2 * p + k] = k == 0 ? rng_uniform(2.0, 2.01) : rng_uniform(0, 0.02);
+                a->velocity_sigma[2 * p + k] = p == 2 ? INFINITY : 3e-3;
+            }
+        }
+        const char *path = tmp_file(dvl ? "aiding.h5" : "aiding-gyro.h5");
+        CHECK_OK(sasnav_run_write(path, run));
+        CHECK_OK(sasnav_run_read(path, &back));
+        CHECK(back && runs_identical(run, back) && aiding_identical(run->aiding, back->aiding, run->n_pings),
+              "aiding round trip (DVL %d) is not bit-exact", dvl);
+        sasnav_run_free(back);
+        sasnav_run_free(run);
+    }
+    /* Bad aiding in a file. */
+    sasnav_run *run = random_run(310, 6, 3, 16, 1), *back = NULL;
+    if (!run) return;
+    CHECK_OK(sasnav_run_alloc_aiding(run, 1, 1));
+    for (int p = 0; p < run->n_pings; p++) {
+        run->aiding->time[p] = 0.1 * p;
+        run->aiding->yaw_rate_sigma[p] = 1e-6;
+        run->aiding->velocity_sigma[2 * p] = run->aiding->velocity_sigma[2 * p + 1] = 3e-3;
+    }
+    const char *good = tmp_file("aiding-good.h5");
+    CHECK_OK(sasnav_run_write(good, run));
+    struct {
+        const char *name, *dataset, *expect;
+        int kind; /* 0 poke NaN, 1 short dataset, 2 negative sigma, 3 zero sigma, 4 times, 5 drop sigma */
+    } cases[] = {{"aiding-nan.h5", "/aiding/yaw_rate", "not finite", 0},
+                 {"aiding-short.h5", "/aiding/velocity", "/aiding/velocity", 1},
+                 {"aiding-negative.h5", "/aiding/yaw_rate_sigma", "must be > 0", 2},
+                 {"aiding-zero.h5", "/aiding/velocity_sigma", "must be > 0", 3},
+                 {"aiding-time.h5", "/aiding/time", "must increase", 4},
+                 {"aiding-nosigma.h5", "/aiding/yaw_rate_sigma", "come together", 5}};
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        const char *path = tmp_file(cases[c].name);
+        CHECK_OK(sasnav_run_write(path, run));
+        hid_t f = open_rw(path);
+        double v;
+        switch (cases[c].kind) {
+        case 0: v = NAN; poke(f, cases[c].dataset, H5T_NATIVE_DOUBLE, 3, 1, &v); break;
+        case 1: {
+            hsize_t d[2] = {(hsize_t)run->n_pings - 1, 2};
+            double zeros[12] = {0};
+            replace_dataset(f, cases[c].dataset, H5T_NATIVE_DOUBLE, 2, d, zeros);
+            break;
+        }
+        case 2: v = -1e-6; poke(f, cases[c].dataset, H5T_NATIVE_DOUBLE, 2, 1, &v); break;
+        case 3: v = 0.0; poke(f, cases[c].dataset, H5T_NATIVE_DOUBLE, 5, 2, &v); break;
+        case 4: v = 0.1; poke(f, cases[c].dataset, H5T_NATIVE_DOUBLE, 3, 1, &v); break;
+        case 5: H5Ldelete(f, cases[c].dataset, H5P_DEFAULT); break;
+        }
+        H5Fclose(f);
+        CHECK_FAILS(sasnav_run_read(path, &back), SASNAV_ERR_FORMAT);
+        CHECK(strstr(sasnav_last_error(), cases[c].expect) != NULL && strstr(sasnav_last_error(), "aiding"),
+              "%s: message '%s' does not say '%s'", cases[c].name, sasnav_last_error(), cases[c].expect);
+        CHECK(back == NULL, "%s: run returned", cases[c].name);
+    }
+    /* In memory: sasnav_run_check refuses the same. */
+    run->aiding->velocity[1] = NAN;
+    CHECK(sasnav_run_check(run) == SASNAV_ERR_ARG, "NaN velocity accepted in memory");
+    sasnav_run_free(run);
+}
+
 static void test_bad_run_files(void)
 {
     sasnav_run *run = NULL;
@@ -881,6 +974,7 @@ static void test_run_container(void)
 
 int main(void)
 {
+    test_aiding();
     test_grid();
     test_run_container();
     test_run_round_trip();

@@ -132,15 +132,18 @@ typedef enum {
 const char *sasnav_verdict_name(int verdict);
 
 /* Candidates: the local minima of the global stage's valley scan (lowest
- * score first). */
-#define SASNAV_PAIR_MAX_CANDIDATES 4
+ * score first, at most SASNAV_PAIR_SCAN_CANDIDATES), then the slip check's
+ * points one phase-centre slip either side of the winner. */
+#define SASNAV_PAIR_SCAN_CANDIDATES 4
+#define SASNAV_PAIR_MAX_CANDIDATES 8
 /* At most this many of them go through the zeta and level-1 eta stages. */
 #define SASNAV_PAIR_REFINED_CANDIDATES 3
 
 typedef struct {
     sasnav_pose error;   /* motion error: after the zeta and level-1 eta
                             stages when refined, else the scan's point */
-    double zeta_scan;    /* zeta of the valley scan there (NaN: no scan) */
+    double zeta_scan;    /* zeta of the valley scan there (NaN: no scan, or
+                            a slip-check neighbour) */
     double zeta, eta;    /* after the zeta and level-1 eta stages (NaN
                             when not refined) */
     int refined;

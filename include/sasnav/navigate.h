@@ -138,9 +138,9 @@ typedef struct {
                                  paper-trajectory motion, docs/navigation.md) */
     double eta_weight;        /* weight of ln(eta / lowest eta) in the joint
                                  choice (default 20) */
-    double aiding_gate;       /* an estimate further from the aiding than a
-                                 quarter of a phase-centre slip (d / 4 of
-                                 surge, d / (4 R) of yaw) plus this many of
+    double aiding_gate;       /* an estimate further from the aiding than
+                                 half a phase-centre slip (d / 2 of surge,
+                                 d / (2 R) of yaw) plus this many of
                                  the aiding's standard deviations is
                                  estimated again from the aiding (default 5) */
     int nthreads;             /* OpenMP threads of the estimators (0 = OpenMP

@@ -312,18 +312,18 @@ static int usable(const sasnav_navigate_pair *np)
 }
 
 /* Whether an estimate u agrees with the aiding v (standard deviations sa)
- * in surge and yaw, the directions of a phase-centre slip: within a
- * quarter of the slip (d / 4 of surge, d / (4 R) of yaw, d the
- * phase-centre spacing, R the range of interest) plus `gate` standard
- * deviations of the aiding. A quarter slip is far above the estimator's
- * own spread (surge ~1 mm, yaw ~2e-4 rad, docs/estimator.md) and far
- * below the slip itself. Components without aiding always agree. */
+ * in surge and yaw, the directions of a phase-centre slip: within half a
+ * slip (d / 2 of surge, d / (2 R) of yaw, d the phase-centre spacing, R
+ * the range of interest) plus `gate` standard deviations of the aiding.
+ * Half a slip is above the estimator's own spread (surge ~1 mm, yaw ~2e-4
+ * rad on extended scenes, up to 7e-4 rad on a point target) and a slip
+ * exceeds it on both axes. Components without aiding always agree. */
 static int agrees(const nav_ctx *ctx, sasnav_pose u, sasnav_pose v, sasnav_pose sa)
 {
     double gate = ctx->opts->aiding_gate;
     double d = ctx->pc_spacing, r = ctx->run->range_of_interest > 0 ? ctx->run->range_of_interest : 1.0;
-    if (isfinite(sa.x) && fabs(u.x - v.x) > 0.25 * d + gate * sa.x) return 0;
-    if (isfinite(sa.theta) && fabs(u.theta - v.theta) > 0.25 * d / r + gate * sa.theta) return 0;
+    if (isfinite(sa.x) && fabs(u.x - v.x) > 0.5 * d + gate * sa.x) return 0;
+    if (isfinite(sa.theta) && fabs(u.theta - v.theta) > 0.5 * d / r + gate * sa.theta) return 0;
     return 1;
 }
 
@@ -344,7 +344,11 @@ static int reestimate(nav_ctx *ctx, sasnav_navigate_pair *np, sasnav_pose start,
     if (!rc) rc = sasnav_pair_estimate_from(est, start, &r);
     if (fatal_code(rc)) return rc;
     if (rc || r.status == SASNAV_ERR_NO_OVERLAP) return SASNAV_OK;
-    int better = !usable(np) || !require_lower || r.eta < np->result.eta;
+    /* With aiding, a new estimate may be up to the verdict's margin worse
+     * in eta than the first (the data could not tell the two apart: that
+     * is what the aiding is for); without, it must be lower. */
+    double tol = isfinite(sa.x + sa.theta) ? ctx->opts->pair.verdict_margin_min : 1.0;
+    int better = !usable(np) || !require_lower || r.eta < tol * np->result.eta;
     if (!better || !agrees(ctx, r.error, a, sa)) return SASNAV_OK;
     /* Keep the first estimate's candidates (what the data offered), the
      * new estimate's values, time and cost added. */
@@ -362,6 +366,9 @@ static int reestimate(nav_ctx *ctx, sasnav_navigate_pair *np, sasnav_pose start,
     *taken = 1;
     return SASNAV_OK;
 }
+
+/* The graver of two verdicts (ok < ambiguous < failed < no_overlap). */
+static int worse(int a, int b) { return a > b ? a : b; }
 
 /* Standard deviations of a pair's estimate in the smoother. */
 static sasnav_pose estimate_sigma(const nav_ctx *ctx, const sasnav_navigate_pair *np)
@@ -468,7 +475,9 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
         if (!rc && taken) {
             np->resolution = SASNAV_RESOLVED_CANDIDATE;
             np->result.chosen = c->candidate;
-            np->verdict = np->result.verdict;
+            /* Only the aiding settles an ambiguity (below); the motion
+             * model's choice stays as doubtful as the pair was. */
+            np->verdict = worse(np->first_verdict, np->result.verdict);
         }
     }
     if (rc) goto done;
@@ -500,8 +509,14 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
         if (rc) break;
         if (taken) {
             np->resolution = SASNAV_RESOLVED_REESTIMATED;
-            np->verdict = np->result.verdict;
-            if (with_aiding && np->verdict != SASNAV_VERDICT_NO_OVERLAP) np->verdict = SASNAV_VERDICT_OK;
+            /* Confirmed by the aiding (reestimate keeps only estimates that
+             * agree with it), or a local estimate from the motion model's
+             * prediction that no candidate competition has tested:
+             * ambiguous at best. */
+            if (with_aiding && isfinite(sa[j].x + sa[j].theta) && np->result.verdict != SASNAV_VERDICT_NO_OVERLAP)
+                np->verdict = SASNAV_VERDICT_OK;
+            else
+                np->verdict = worse(SASNAV_VERDICT_AMBIGUOUS, np->result.verdict);
         } else if (!ok_alone || !agree) {
             np->resolution = SASNAV_RESOLVED_BRIDGED;
         }
