@@ -132,11 +132,13 @@ static int navigate(demo *d, int m)
     path_in(d, m == 0 ? "nav-subspace.h5" : "nav-dpca.h5", path, sizeof path);
     rc = sasnav_nav_write(path, d->nav[m].n_pings, d->nav[m].nav, d->run->truth);
     if (rc) return cli_fail("demo", rc, "cannot write %s", path);
-    for (int j = 0; j < d->nav[m].n_pairs; j++)
-        if (d->nav[m].pairs[j].status != SASNAV_OK)
-            fprintf(stderr, "sasnav demo: warning: %s pair %d-%d: %s\n", method_name[m],
-                    d->nav[m].pairs[j].p, d->nav[m].pairs[j].q,
-                    sasnav_strerror(d->nav[m].pairs[j].status));
+    for (int j = 0; j < d->nav[m].n_pairs; j++) {
+        const sasnav_navigate_pair *np = &d->nav[m].pairs[j];
+        if (np->verdict != SASNAV_VERDICT_OK || np->resolution == SASNAV_RESOLVED_BRIDGED)
+            fprintf(stderr, "sasnav demo: warning: %s pair %d-%d is %s (%s)\n", method_name[m], np->p,
+                    np->q, np->resolution == SASNAV_RESOLVED_BRIDGED ? "bridged" : sasnav_verdict_name(np->verdict),
+                    np->status != SASNAV_OK ? sasnav_strerror(np->status) : "see report.md");
+    }
     return 0;
 }
 
@@ -275,15 +277,33 @@ static int write_report(demo *d)
                "surge (taken as nominal).\n\n");
     fprintf(f, "## Trajectory errors\n\n");
     fprintf(f, "| method | final surge (mm) | final sway (mm) | final yaw (rad) | rms cumulative sway (mm) | "
-               "rms differential sway (mm) | track angle (rad) | failed pairs |\n");
-    fprintf(f, "|---|---|---|---|---|---|---|---|\n");
+               "rms differential sway (mm) | track angle (rad) | failed pairs | flagged pairs |\n");
+    fprintf(f, "|---|---|---|---|---|---|---|---|---|\n");
     for (int m = 0; m < 2; m++) {
         const sasnav_navigation *nv = &d->nav[m];
         sasnav_pose fe = nv->cumulative[n - 1];
-        fprintf(f, "| %s | %+.3f | %+.4f | %+.2e | %.4f | %.4f | %+.3e | %d |\n", method_name[m],
+        fprintf(f, "| %s | %+.3f | %+.4f | %+.2e | %.4f | %.4f | %+.3e | %d | %d |\n", method_name[m],
                 1e3 * fe.x, 1e3 * fe.y, fe.theta, 1e3 * nv->rms_cumulative.y,
-                1e3 * nv->rms_differential.y, nv->track_angle, nv->n_failed);
+                1e3 * nv->rms_differential.y, nv->track_angle, nv->n_failed, nv->n_flagged);
     }
+    /* Flagged pairs, one row each (docs/navigation.md, "Trust"). */
+    int any = 0;
+    for (int m = 0; m < 2; m++)
+        for (int j = 0; j < d->nav[m].n_pairs; j++) {
+            const sasnav_navigate_pair *np = &d->nav[m].pairs[j];
+            if (np->verdict == SASNAV_VERDICT_OK && np->resolution == SASNAV_RESOLVED_NONE) continue;
+            if (!any)
+                fprintf(f, "\n**Pairs flagged or resolved over the run** (status of the estimate; how "
+                           "the run resolved it):\n\n| method | pair | first status | status | "
+                           "resolution | eta | margin | error surge (mm) | yaw (rad) |\n"
+                           "|---|---|---|---|---|---|---|---|---|\n");
+            any = 1;
+            fprintf(f, "| %s | %d-%d | %s | %s | %s | %.3f | %.3f | %+.3f | %+.2e |\n", method_name[m],
+                    np->p, np->q, sasnav_verdict_name(np->first_verdict), sasnav_verdict_name(np->verdict),
+                    sasnav_resolution_name(np->resolution), np->result.eta, np->result.margin,
+                    1e3 * np->error.x, np->error.theta);
+        }
+    if (!any) fprintf(f, "\nEvery pair's estimate is \"ok\" (no pair flagged or resolved over the run).\n");
     fprintf(f, "\nlambda / 10 = %.2f mm (SAS imaging tolerance), lambda / 25 = %.2f mm (the paper's "
                "final sway error).\n\n",
             1e3 * lambda / 10, 1e3 * lambda / 25);

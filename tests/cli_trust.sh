@@ -1,0 +1,103 @@
+#!/bin/sh
+# Trust and aiding from the command line, as a user runs them:
+# `simulate --aiding` writes /aiding; `navigate --json` reports per pair a
+# status, candidates, the resolution and the aiding; `navigate --method
+# aiding` dead-reckons; `--no-aiding` ignores the aiding; a run without
+# aiding refuses --method aiding (exit 1, one message, no output); bad
+# --motion-sigma or --method is refused; a compact scene's flagged pairs
+# give one warning line each on stderr. (Exit statuses of usage errors: the
+# issue on the CLI's conventions.)
+# Usage: sh tests/cli_trust.sh path/to/sasnav
+set -u
+CLI=${1:?usage: cli_trust.sh path/to/sasnav}
+T=$(mktemp -d "${TMPDIR:-/tmp}/sasnav-cli-trust-XXXXXX") || exit 1
+trap 'rm -rf "$T"' EXIT INT TERM
+FAILED=0
+fail() {
+    echo "cli_trust: FAIL: $*" >&2
+    FAILED=1
+}
+
+cat > "$T/tiny.yaml" <<'EOF'
+preset: paper-trajectory
+trajectory: {n_pings: 3, x_start: -0.2, surge_rms: 0.003, sway_rms: 0.003, yaw_rms: 0.003}
+noise: {snr_db: inf}
+EOF
+"$CLI" simulate --config "$T/tiny.yaml" --aiding -o "$T/run.h5" 2> "$T/sim.err" ||
+    { cat "$T/sim.err" >&2; fail "simulate --aiding"; exit 1; }
+grep -q "+ aiding" "$T/sim.err" || fail "simulate does not say it wrote aiding"
+if command -v h5ls > /dev/null 2>&1; then
+    h5ls -r "$T/run.h5" | grep -q "/aiding/yaw_rate " || fail "no /aiding/yaw_rate in the run file"
+fi
+
+# Fused navigation, JSON.
+"$CLI" navigate "$T/run.h5" --k 2 --i 1 --json -o "$T/nav.h5" > "$T/nav.json" 2> "$T/nav.err" ||
+    { cat "$T/nav.err" >&2; fail "navigate with aiding"; }
+# Without aiding, same run.
+"$CLI" navigate "$T/run.h5" --k 2 --i 1 --no-aiding --json -o "$T/nav0.h5" > "$T/nav0.json" \
+    2> "$T/nav0.err" || { cat "$T/nav0.err" >&2; fail "navigate --no-aiding"; }
+# Dead reckoning.
+"$CLI" navigate "$T/run.h5" --method aiding --json -o "$T/nava.h5" > "$T/nava.json" \
+    2> "$T/nava.err" || { cat "$T/nava.err" >&2; fail "navigate --method aiding"; }
+if [ -x /usr/bin/python3 ]; then
+    /usr/bin/python3 - "$T/nav.json" "$T/nav0.json" "$T/nava.json" <<'EOF' || fail "JSON content"
+import json, sys
+fused, alone, aid = (json.load(open(f)) for f in sys.argv[1:4])
+assert fused["aiding_used"] is True and alone["aiding_used"] is False, (fused["aiding_used"], alone["aiding_used"])
+assert aid["method"] == "aiding" and aid["aiding_used"] is True
+for d in (fused, alone):
+    assert len(d["pairs"]) == 2
+    for p in d["pairs"]:
+        for k in ("status", "first_status", "resolution", "candidates", "estimate", "eta", "error"):
+            assert k in p, k
+        assert p["status"] in ("ok", "ambiguous", "failed", "no_overlap"), p["status"]
+        assert p["resolution"] in ("kept", "candidate", "re-estimated", "bridged"), p["resolution"]
+        assert len(p["candidates"]) >= 1 and sum(c["chosen"] for c in p["candidates"]) == 1
+for p in fused["pairs"]:
+    assert "aiding" in p and "aiding_sigma" in p, p.keys()
+    # A navigation-grade gyro: the fused yaw within 1e-5 rad of the truth.
+    assert abs(p["error"]["yaw"]) < 1e-5, p["error"]
+for p in alone["pairs"]:
+    assert "aiding" not in p
+# Noise-free, coarse iterations: the fused final sway within lambda / 25.
+assert abs(fused["final_sway_error"]) < 2e-4, fused["final_sway_error"]
+assert fused["flagged_pairs"] == 0 and alone["flagged_pairs"] == 0
+EOF
+fi
+
+# A run without aiding: --method aiding refused, no output.
+"$CLI" simulate --config "$T/tiny.yaml" -o "$T/plain.h5" 2> /dev/null || fail "simulate"
+if "$CLI" navigate "$T/plain.h5" --method aiding -o "$T/none.h5" > /dev/null 2> "$T/e1"; then
+    fail "--method aiding accepted without aiding"
+else
+    [ $? -eq 1 ] || fail "--method aiding without aiding: exit status not 1"
+fi
+grep -q "aiding" "$T/e1" || fail "message does not mention the aiding: $(cat "$T/e1")"
+[ "$(wc -l < "$T/e1")" -eq 1 ] || fail "more than one message line: $(cat "$T/e1")"
+[ -e "$T/none.h5" ] && fail "output written for a refused navigation"
+
+# Bad options: refused with a message naming them, nothing written.
+if "$CLI" navigate "$T/run.h5" --motion-sigma 0.01,0,0.01 -o "$T/x.h5" > /dev/null 2> "$T/e2"; then
+    fail "--motion-sigma with a zero accepted"
+fi
+grep -q "motion-sigma" "$T/e2" || fail "message does not name --motion-sigma"
+if "$CLI" navigate "$T/run.h5" --method nope -o "$T/x.h5" > /dev/null 2> "$T/e3"; then
+    fail "--method nope accepted"
+fi
+grep -q "aiding" "$T/e3" || fail "--method message does not list aiding"
+[ -e "$T/x.h5" ] && fail "output written after a bad option"
+
+# A compact scene: one point target; its pairs are ambiguous, each gets one
+# warning line naming the pair and its status.
+cat > "$T/point.yaml" <<'EOF'
+preset: point
+trajectory: {n_pings: 3, x_start: -0.2}
+EOF
+"$CLI" simulate --config "$T/point.yaml" -o "$T/point.h5" 2> /dev/null || fail "simulate point"
+"$CLI" navigate "$T/point.h5" --k 2 --i 1 -o "$T/pnav.h5" > "$T/pnav.txt" 2> "$T/pnav.err" ||
+    { cat "$T/pnav.err" >&2; fail "navigate point"; }
+grep -q "warning: pair 0-1 is ambiguous" "$T/pnav.err" ||
+    fail "no warning for the ambiguous pair 0-1: $(cat "$T/pnav.err")"
+grep -q "pairs flagged" "$T/pnav.txt" || fail "the text summary lacks the flagged count"
+
+exit $FAILED
