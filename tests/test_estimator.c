@@ -230,6 +230,7 @@ static void check_verdict(void)
     sasnav_pair_default_opts(&po);
     po.k = po.coarse_k;
     po.i = po.coarse_i;
+    po.range_extent = 0.6; /* m: cost / 2.7; the target and the speckle stay inside */
     po.range = run->range_of_interest;
     po.tx_lag = run->tx_lag;
     sasnav_pair *pair = NULL;
