@@ -17,6 +17,7 @@ static const char *help =
     "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
     "                       [--cross-extent M] [--range-extent M]\n"
     "                       [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]\n"
+    "                       [--speed-lags none|dvl|pairs]\n"
     "                       [--threads N] [--json]\n"
     "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
     "\n"
@@ -58,6 +59,11 @@ static const char *help =
     "  --no-aiding       ignore the run's aiding measurements\n"
     "  --no-resolve      take each pair's own estimate (no joint resolution, no\n"
     "                    fusion: the paper's method)\n"
+    "  --speed-lags M    per-ping EPCA Tx-array offsets scaled by the speed at\n"
+    "                    each ping: none (default: the run's offset), dvl (from\n"
+    "                    the aiding's DVL, no extra cost), pairs (the DVL, or\n"
+    "                    without one the pairs' first surge estimates and a\n"
+    "                    second estimate of every pair: ~1.8x the time)\n"
     "  --motion-sigma S,W,Y  standard deviations of the change of the motion\n"
     "                    error from one pair to the next (m, m, rad; default\n"
     "                    0.01,0.01,0.01)\n"
@@ -245,6 +251,7 @@ int cmd_navigate(int argc, char **argv)
         {"cross-extent", required_argument, 0, 'X'}, {"surge-sigma", required_argument, 0, 'U'},
         {"range-extent", required_argument, 0, 'E'}, {"no-aiding", no_argument, 0, 'N'},
         {"no-resolve", no_argument, 0, 'R'}, {"motion-sigma", required_argument, 0, 'M'},
+        {"speed-lags", required_argument, 0, 'S'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -297,6 +304,12 @@ int cmd_navigate(int argc, char **argv)
                 return cli_fail("navigate", 0, "--range-extent needs a length in (0, 100] m");
             break;
         case 'N': no.use_aiding = 0; break;
+        case 'S':
+            if (!strcmp(optarg, "none")) no.speed_lags = 0;
+            else if (!strcmp(optarg, "dvl")) no.speed_lags = 1;
+            else if (!strcmp(optarg, "pairs")) no.speed_lags = 2;
+            else return cli_fail("navigate", 0, "--speed-lags needs none, dvl or pairs (got '%s')", optarg);
+            break;
         case 'R': no.resolve = 0; break;
         case 'M': {
             double ms[3];

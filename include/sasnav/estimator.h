@@ -203,6 +203,15 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
 int sasnav_pair_set_data(sasnav_pair *pair, const sasnav_cfloat *data_p,
                          const sasnav_cfloat *data_q, sasnav_pose nominal);
 
+/* The same with each ping's own EPCA Tx-array offset (m; set_data uses
+ * opts.tx_lag for both). The offset is speed x two-way delay: a ping made
+ * while the vehicle is faster than nominal has a longer one, and a
+ * difference between the two pings' offsets that the model ignores biases
+ * the yaw estimate (docs/estimator.md, "Where the yaw errors come from"). */
+int sasnav_pair_set_data_lags(sasnav_pair *pair, const sasnav_cfloat *data_p,
+                              const sasnav_cfloat *data_q, sasnav_pose nominal, double lag_p,
+                              double lag_q);
+
 /* Evaluates zeta and eta at a hypothesised MOTION ERROR (displacement =
  * nominal + error). level 0: coarse pixels, coarse (k, i); level 1: full
  * pixels, coarse (k, i); level 2: full pixels, final (k, i). blurred != 0

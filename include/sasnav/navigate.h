@@ -145,6 +145,16 @@ typedef struct {
                                  estimated again from the aiding (default 5) */
     int nthreads;             /* OpenMP threads of the estimators (0 = OpenMP
                                  default); copied into pair and dpca */
+    int speed_lags;           /* per-ping EPCA Tx-array offsets scaled by the
+                                 vehicle's speed at each ping (the offset is
+                                 speed x two-way delay; docs/estimator.md,
+                                 "Where the yaw errors come from"): 0 = the
+                                 run's tx_lag for every ping (default);
+                                 1 = from the DVL aiding when the run has it
+                                 (no extra cost); 2 = the same, and without
+                                 a DVL from the pairs' first estimates of
+                                 surge, every ok pair then estimated again
+                                 (local stages: about 1.8x the time) */
     const sasnav_navigation *reuse; /* a navigation of the same run by the
                                  same method and pair options: its pairs'
                                  first estimates (first_result) are used

@@ -207,7 +207,7 @@ static int level_make_ops(sasnav_pair *pr, pair_level *lv, double xcentre, pair_
     free(y);
     if (rc) return rc;
     /* Ping p sits at the origin of its own centroid frame. */
-    rc = sasnav_op_set_geometry(lv->op_p, &pr->local);
+    rc = sasnav_op_set_geometry(lv->op_p, &pr->local_p);
     if (rc) return rc;
     return level_rho_p(pr, lv);
 }
@@ -267,7 +267,7 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
         double d = array->n_rx > 1 ? 0.5 * fabs(array->rx_u[1] - array->rx_u[0]) : dmax / 2.0;
         o->box.theta = d > 0 ? 0.9 * lambda / (4.0 * d) : 0.05;
     }
-    pr->local = sasnav_epca_local(o->tx_lag, 0.0);
+    pr->local_p = pr->local_q = sasnav_epca_local(o->tx_lag, 0.0);
     pr->nd = (size_t)array->n_rx * win->n_samples;
     pr->data_p = malloc(sizeof(sasnav_cfloat) * pr->nd);
     pr->data_q = malloc(sizeof(sasnav_cfloat) * pr->nd);
@@ -317,7 +317,18 @@ static int check_channels(const sasnav_pair *pr, const sasnav_cfloat *d, const c
 int sasnav_pair_set_data(sasnav_pair *pr, const sasnav_cfloat *data_p,
                          const sasnav_cfloat *data_q, sasnav_pose nominal)
 {
+    if (!pr) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    return sasnav_pair_set_data_lags(pr, data_p, data_q, nominal, pr->opts.tx_lag, pr->opts.tx_lag);
+}
+
+int sasnav_pair_set_data_lags(sasnav_pair *pr, const sasnav_cfloat *data_p,
+                              const sasnav_cfloat *data_q, sasnav_pose nominal, double lag_p,
+                              double lag_q)
+{
     if (!pr || !data_p || !data_q) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    if (!(lag_p >= 0) || !(lag_q >= 0) || !isfinite(lag_p) || !isfinite(lag_q))
+        return sasnav_set_error(SASNAV_ERR_ARG, "Tx-array offsets must be finite and >= 0 (got %g, %g)",
+                                lag_p, lag_q);
     if (!isfinite(nominal.x) || !isfinite(nominal.y) || !isfinite(nominal.theta))
         return sasnav_set_error(SASNAV_ERR_ARG, "nominal displacement is not finite");
     int rc = check_channels(pr, data_p, "p");
@@ -328,6 +339,8 @@ int sasnav_pair_set_data(sasnav_pair *pr, const sasnav_cfloat *data_p,
     memcpy(pr->data_p, data_p, sizeof(sasnav_cfloat) * pr->nd);
     memcpy(pr->data_q, data_q, sizeof(sasnav_cfloat) * pr->nd);
     pr->nominal = nominal;
+    pr->local_p = sasnav_epca_local(lag_p, 0.0);
+    pr->local_q = sasnav_epca_local(lag_q, 0.0);
     double xc = 0.5 * nominal.x;
     for (int v = 0; v < PAIR_LEVELS && !rc; v++)
         rc = level_make_ops(pr, &pr->level[v], xc, v == 2 ? &pr->level[1] : NULL);
@@ -347,7 +360,7 @@ static int place_q(sasnav_pair *pr, int level, sasnav_pose error)
     sasnav_pose sigma = {pr->nominal.x + error.x, pr->nominal.y + error.y,
                          pr->nominal.theta + error.theta};
     /* Move q's sensors: T_q(sigma) = q's EPCA geometry placed at sigma. */
-    sasnav_ping_pose q = sasnav_ping_place(sigma, &pr->local);
+    sasnav_ping_pose q = sasnav_ping_place(sigma, &pr->local_q);
     int rc = sasnav_op_set_geometry(own->op_q, &q);
     if (rc) return rc;
     own->q_sigma = error;

@@ -49,7 +49,7 @@ struct sasnav_pair {
     sasnav_array array;
     sasnav_window win;
     sasnav_pair_opts opts;
-    sasnav_ping_pose local; /* EPCA geometry of both pings in their centroid frames */
+    sasnav_ping_pose local_p, local_q; /* EPCA geometry of each ping in its centroid frame */
     size_t nd;
     sasnav_cfloat *data_p, *data_q;
     sasnav_pose nominal;

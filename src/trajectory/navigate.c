@@ -28,6 +28,7 @@ void sasnav_navigate_default_opts(sasnav_navigate_opts *opts)
     opts->motion_sigma = (sasnav_pose){0.01, 0.01, 0.01};
     opts->eta_weight = 20.0;
     opts->aiding_gate = 5.0;
+    opts->speed_lags = 0;
     opts->nthreads = 0;
     opts->progress = NULL;
     opts->progress_user = NULL;
@@ -89,6 +90,8 @@ typedef struct {
     int n_workers;            /* threads over pairs (1: the operators use the threads) */
     double t0;
     double pc_spacing;        /* m, the array's phase-centre spacing */
+    double *lags;             /* per-ping EPCA Tx-array offsets (m), or NULL:
+                                 run->tx_lag for every ping */
 } nav_ctx;
 
 /* Estimates pair (p, q) into *np. Returns a fatal code, else SASNAV_OK
@@ -132,8 +135,11 @@ static int estimate_pair(nav_ctx *ctx, sasnav_pair *estimator, int p, int q,
         rc = sasnav_dpca_estimate(run, p, q, &o, &np->result, NULL);
     } else {
         double t = sasnav_now_seconds();
-        rc = sasnav_pair_set_data(estimator, sasnav_run_ping(run, p), sasnav_run_ping(run, q),
-                                  np->nominal);
+        rc = ctx->lags ? sasnav_pair_set_data_lags(estimator, sasnav_run_ping(run, p),
+                                                   sasnav_run_ping(run, q), np->nominal,
+                                                   ctx->lags[p], ctx->lags[q])
+                       : sasnav_pair_set_data(estimator, sasnav_run_ping(run, p),
+                                              sasnav_run_ping(run, q), np->nominal);
         if (!rc) rc = sasnav_pair_estimate(estimator, &np->result);
         if (rc) np->result.seconds = sasnav_now_seconds() - t;
     }
@@ -180,6 +186,8 @@ static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
         return sasnav_set_error(SASNAV_ERR_ARG,
                                 "navigate: navigation by aiding alone needs a run with aiding "
                                 "measurements (and aiding and resolution enabled)");
+    if (o->speed_lags < 0 || o->speed_lags > 2)
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigate: speed_lags must be 0, 1 or 2");
     if (o->reuse && (o->reuse->method != o->method || o->reuse->n_pings != run->n_pings || !o->reuse->pairs))
         return sasnav_set_error(SASNAV_ERR_ARG,
                                 "navigate: the navigation to reuse is of another method or run");
@@ -339,8 +347,11 @@ static int reestimate(nav_ctx *ctx, sasnav_navigate_pair *np, sasnav_pose start,
     const sasnav_run *run = ctx->run;
     sasnav_pair *est = ctx->estimators[0];
     sasnav_pair_result r;
-    int rc = sasnav_pair_set_data(est, sasnav_run_ping(run, np->p), sasnav_run_ping(run, np->q),
-                                  np->nominal);
+    int rc = ctx->lags ? sasnav_pair_set_data_lags(est, sasnav_run_ping(run, np->p),
+                                                   sasnav_run_ping(run, np->q), np->nominal,
+                                                   ctx->lags[np->p], ctx->lags[np->q])
+                       : sasnav_pair_set_data(est, sasnav_run_ping(run, np->p),
+                                              sasnav_run_ping(run, np->q), np->nominal);
     if (!rc) rc = sasnav_pair_estimate_from(est, start, &r);
     if (fatal_code(rc)) return rc;
     if (rc || r.status == SASNAV_ERR_NO_OVERLAP) return SASNAV_OK;
@@ -560,6 +571,99 @@ static void pair_summary(const sasnav_run *run, sasnav_navigation *out)
     }
 }
 
+/* Per-ping Tx-array offsets scaled by the vehicle's speed at each ping
+ * (the offset is speed x two-way delay): lag_p = tx_lag (1 + a_p), a_p the
+ * relative speed excess. From the DVL (the mean of the two intervals
+ * around the ping) when `from_dvl`, else from the consecutive pairs'
+ * surge motion errors (their mean over the nominal step). */
+static void speed_lags(const nav_ctx *ctx, const sasnav_navigation *out, int from_dvl, double *lags)
+{
+    const sasnav_run *run = ctx->run;
+    int n = run->n_pings;
+    const sasnav_aiding *ad = run->aiding;
+    for (int p = 0; p < n; p++) {
+        double a = 0;
+        if (from_dvl) {
+            double dt0 = p > 0 ? ad->time[p] - ad->time[p - 1] : 0;
+            double dt1 = p + 1 < n ? ad->time[p + 1] - ad->time[p] : 0;
+            double sum = 0, w = 0;
+            if (p > 0) {
+                sasnav_pose nom = sasnav_ping_displacement(&run->nav[p - 1], &run->nav[p]);
+                sum += ad->velocity[2 * p] * dt0 / fabs(nom.x) - 1.0;
+                w += 1;
+            }
+            if (p + 1 < n) {
+                sasnav_pose nom = sasnav_ping_displacement(&run->nav[p], &run->nav[p + 1]);
+                sum += ad->velocity[2 * (p + 1)] * dt1 / fabs(nom.x) - 1.0;
+                w += 1;
+            }
+            a = w > 0 ? sum / w : 0.0;
+        } else {
+            double sum = 0, w = 0;
+            for (int j = p - 1; j <= p; j++) {
+                if (j < 0 || j >= n - 1) continue;
+                const sasnav_navigate_pair *np = &out->pairs[j];
+                if (np->first_verdict != SASNAV_VERDICT_OK || !(fabs(np->nominal.x) > 0)) continue;
+                sum += np->result.error.x / fabs(np->nominal.x);
+                w += 1;
+            }
+            a = w > 0 ? sum / w : 0.0;
+        }
+        if (!isfinite(a) || a < -0.5) a = 0; /* nonsense speeds: keep the nominal offset */
+        lags[p] = run->tx_lag * (1.0 + a);
+    }
+}
+
+/* The second pass of opts.speed_lags = 2: every consecutive pair whose
+ * first estimate is ok is estimated again from it with the per-ping
+ * offsets (local stages only); its candidates and margin stay the first
+ * pass's. Concurrent over pairs like the first pass. */
+static int second_pass(nav_ctx *ctx, sasnav_navigation *out)
+{
+    int n = ctx->run->n_pings - 1, stop = 0;
+    int *codes = calloc((size_t)(n > 0 ? n : 1), sizeof(int));
+    if (!codes) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+#pragma omp parallel for schedule(dynamic, 1) num_threads(ctx->n_workers) if (ctx->n_workers > 1)
+    for (int j = 0; j < n; j++) {
+        int skip;
+#pragma omp atomic read
+        skip = stop;
+        sasnav_navigate_pair *np = &out->pairs[j];
+        if (skip || np->first_verdict != SASNAV_VERDICT_OK || !usable(np)) continue;
+        int t = ctx->n_workers > 1 ? omp_get_thread_num() : 0;
+        sasnav_pair *est = ctx->estimators[t];
+        const sasnav_run *run = ctx->run;
+        sasnav_pair_result r;
+        int rc = sasnav_pair_set_data_lags(est, sasnav_run_ping(run, np->p), sasnav_run_ping(run, np->q),
+                                           np->nominal, ctx->lags[np->p], ctx->lags[np->q]);
+        if (!rc) rc = sasnav_pair_estimate_from(est, np->result.error, &r);
+        if (fatal_code(rc)) {
+            codes[j] = rc;
+#pragma omp atomic write
+            stop = 1;
+            continue;
+        }
+        if (rc || r.verdict != SASNAV_VERDICT_OK) continue; /* keep the first estimate */
+        r.n_candidates = np->result.n_candidates;
+        memcpy(r.candidates, np->result.candidates, sizeof r.candidates);
+        r.chosen = np->result.chosen;
+        r.ambiguity = np->result.ambiguity;
+        r.margin = np->result.margin;
+        r.seconds += np->result.seconds;
+        r.applications += np->result.applications;
+        r.evaluations += np->result.evaluations;
+        np->result = r;
+        np->status = r.status;
+        np->first_result = r;
+        np->first_status = r.status;
+    }
+    int rc = SASNAV_OK;
+    for (int j = 0; j < n && !rc; j++)
+        if (codes[j]) rc = codes[j];
+    free(codes);
+    return rc;
+}
+
 /* Centroids from the pair displacements: the chain, or the least squares
  * over all links when long baselines were estimated. */
 static int solve_centroids(const nav_ctx *ctx, sasnav_navigation *out, sasnav_pose first)
@@ -650,8 +754,23 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
     out->centroids = malloc(sizeof(sasnav_pose) * (size_t)n);
     out->nav = malloc(sizeof(sasnav_ping_pose) * (size_t)n);
     if (!out->centroids || !out->nav) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    const sasnav_navigate_opts *o = ctx->opts;
+    int dvl = run->aiding && run->aiding->velocity && o->use_aiding;
+    if (o->speed_lags && o->method == SASNAV_METHOD_SUBSPACE && dvl && !o->reuse) {
+        ctx->lags = malloc(sizeof(double) * (size_t)n);
+        if (!ctx->lags) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        speed_lags(ctx, out, 1, ctx->lags);
+    }
     int rc = estimate_all(ctx, out);
     if (rc) return rc;
+    if (o->speed_lags == 2 && o->method == SASNAV_METHOD_SUBSPACE && !ctx->lags && !o->reuse) {
+        for (int j = 0; j < out->n_pairs; j++) out->pairs[j].first_verdict = out->pairs[j].result.verdict;
+        ctx->lags = malloc(sizeof(double) * (size_t)n);
+        if (!ctx->lags) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        speed_lags(ctx, out, 0, ctx->lags);
+        rc = second_pass(ctx, out);
+        if (rc) return rc;
+    }
     rc = resolve_pairs(ctx, out);
     if (rc) return rc;
     pair_summary(run, out);
@@ -681,7 +800,8 @@ int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
     int rc = check_input(run, opts);
     if (rc) return rc;
     nav_ctx ctx = {run, opts, NULL, 1, sasnav_now_seconds(),
-                   run->array.n_rx > 1 ? 0.5 * fabs(run->array.rx_u[1] - run->array.rx_u[0]) : 0.025};
+                   run->array.n_rx > 1 ? 0.5 * fabs(run->array.rx_u[1] - run->array.rx_u[0]) : 0.025,
+                   NULL};
     out->method = opts->method;
     out->n_pings = run->n_pings;
     /* Threads: over pairs when there are several pairs (one estimator, or
@@ -711,6 +831,7 @@ int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
     if (ctx.estimators)
         for (int t = 0; t < ctx.n_workers; t++) sasnav_pair_destroy(ctx.estimators[t]);
     free(ctx.estimators);
+    free(ctx.lags);
     out->seconds = sasnav_now_seconds() - ctx.t0;
     if (rc) {
         /* Keep the message of the failure across the frees. */
