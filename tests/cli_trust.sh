@@ -31,10 +31,10 @@ if command -v h5ls > /dev/null 2>&1; then
 fi
 
 # Fused navigation, JSON.
-"$CLI" navigate "$T/run.h5" --k 2 --i 1 --json -o "$T/nav.h5" > "$T/nav.json" 2> "$T/nav.err" ||
+"$CLI" navigate "$T/run.h5" --k 2 --i 1 --range-extent 0.6 --json -o "$T/nav.h5" > "$T/nav.json" 2> "$T/nav.err" ||
     { cat "$T/nav.err" >&2; fail "navigate with aiding"; }
 # Without aiding, same run.
-"$CLI" navigate "$T/run.h5" --k 2 --i 1 --no-aiding --json -o "$T/nav0.h5" > "$T/nav0.json" \
+"$CLI" navigate "$T/run.h5" --k 2 --i 1 --range-extent 0.6 --no-aiding --json -o "$T/nav0.h5" > "$T/nav0.json" \
     2> "$T/nav0.err" || { cat "$T/nav0.err" >&2; fail "navigate --no-aiding"; }
 # Dead reckoning.
 "$CLI" navigate "$T/run.h5" --method aiding --json -o "$T/nava.h5" > "$T/nava.json" \
@@ -94,7 +94,7 @@ preset: point
 trajectory: {n_pings: 3, x_start: -0.2}
 EOF
 "$CLI" simulate --config "$T/point.yaml" -o "$T/point.h5" 2> /dev/null || fail "simulate point"
-"$CLI" navigate "$T/point.h5" --k 2 --i 1 -o "$T/pnav.h5" > "$T/pnav.txt" 2> "$T/pnav.err" ||
+"$CLI" navigate "$T/point.h5" --k 2 --i 1 --range-extent 0.6 -o "$T/pnav.h5" > "$T/pnav.txt" 2> "$T/pnav.err" ||
     { cat "$T/pnav.err" >&2; fail "navigate point"; }
 grep -q "warning: pair 0-1 is ambiguous" "$T/pnav.err" ||
     fail "no warning for the ambiguous pair 0-1: $(cat "$T/pnav.err")"
