@@ -8,6 +8,7 @@
  *   fused      subspace + aiding (the pair estimates of 'subspace' reused)
  *
  * usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE]
+ *                    [--speed-lags 0|1|2]
  *
  * Seeds follow `sasnav simulate --seed S --aiding` (scene 3S+1, trajectory
  * 3S+2, noise 3S+3, aiding 3S+4). Prints one line per run and method, then
@@ -18,7 +19,8 @@
  * 95th percentile of the absolute values over the runs), and the runs with
  * final sway within lambda/25. --pairs FILE writes one line per subspace
  * pair (first estimate: error, eta, margin, verdict, candidates) for the
- * calibration of the verdict. */
+ * calibration of the verdict. --speed-lags sets opts.speed_lags of the
+ * subspace navigation (its estimates are reused by paper and fused). */
 #include "sasnav/error.h"
 #include "sasnav/navigate.h"
 #include "sasnav/sim.h"
@@ -57,7 +59,7 @@ int main(int argc, char **argv)
 {
     long s0 = 1001, ns = 10;
     double snr = 30.0;
-    int threads = 0;
+    int threads = 0, speed_lags = 0;
     const char *pairs_path = NULL;
     for (int a = 1; a < argc; a++) {
         if (!strcmp(argv[a], "--seeds") && a + 2 < argc) {
@@ -68,14 +70,17 @@ int main(int argc, char **argv)
             snr = !strcmp(argv[a], "inf") ? INFINITY : atof(argv[a]);
         } else if (!strcmp(argv[a], "--threads") && a + 1 < argc) {
             threads = atoi(argv[++a]);
+        } else if (!strcmp(argv[a], "--speed-lags") && a + 1 < argc) {
+            speed_lags = atoi(argv[++a]);
         } else if (!strcmp(argv[a], "--pairs") && a + 1 < argc) {
             pairs_path = argv[++a];
         } else {
-            fprintf(stderr, "usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE]\n");
+            fprintf(stderr, "usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE] "
+                            "[--speed-lags 0|1|2]\n");
             return 2;
         }
     }
-    if (ns < 1 || threads < 0) return 2;
+    if (ns < 1 || threads < 0 || speed_lags < 0 || speed_lags > 2) return 2;
     FILE *pf = pairs_path ? fopen(pairs_path, "w") : NULL;
     if (pairs_path && !pf) {
         fprintf(stderr, "bench_trust: cannot write %s\n", pairs_path);
@@ -122,6 +127,7 @@ int main(int argc, char **argv)
             if (m == M_PAPER || m == M_FUSED) o.reuse = &nav[M_SUB];
             if (m == M_DPCA) o.method = SASNAV_METHOD_DPCA;
             if (m == M_AID) o.method = SASNAV_METHOD_AIDING;
+            if (m == M_SUB) o.speed_lags = speed_lags;
             if (sasnav_navigate(run, &o, &nav[m])) {
                 fprintf(stderr, "navigate (%s, seed %ld): %s\n", names[m], s, sasnav_last_error());
                 return 1;
