@@ -111,6 +111,13 @@ st = d["stages"]
 apps = sum(st[s]["applications"] for s in ("global", "zeta", "eta", "final"))
 assert 0 < apps <= d["operator_applications"], (apps, d["operator_applications"])
 assert all(st[s]["seconds"] >= 0 for s in st), st
+# The verdict and the candidates: the paper pair is well posed ("ok"), one
+# candidate is chosen, and the chosen one is the estimate's neighbourhood.
+assert d["verdict"] == "ok", d["verdict"]
+c = d["candidates"]
+assert len(c) >= 1 and sum(x["chosen"] for x in c) == 1, c
+ch = [x for x in c if x["chosen"]][0]
+assert abs(ch["surge"] - d["surge"]) < 5e-3 and abs(ch["yaw"] - d["yaw"]) < 2e-3, (ch, d["surge"])
 print("ok   pair --json: error (%.3f mm, %.4f mm, %.1e rad)" % (1e3 * (d["surge"] - t["surge"]), 1e3 * (d["sway"] - t["sway"]), d["yaw"] - t["yaw"]))
 PY
     then :; else echo "FAIL pair --json content"; fails=$((fails + 1)); fi
