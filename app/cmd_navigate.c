@@ -17,7 +17,7 @@ static const char *help =
     "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
     "                       [--cross-extent M] [--range-extent M]\n"
     "                       [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]\n"
-    "                       [--speed-lags none|dvl|pairs]\n"
+    "                       [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]\n"
     "                       [--threads N] [--json]\n"
     "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
     "\n"
@@ -64,6 +64,9 @@ static const char *help =
     "                    the aiding's DVL, no extra cost), pairs (the DVL, or\n"
     "                    without one the pairs' first surge estimates and a\n"
     "                    second estimate of every pair: ~1.8x the time)\n"
+    "  --aiding-bias S,W,Y  estimate a constant error of the aiding per ping\n"
+    "                    interval (a DVL's bias and scale factor) with these\n"
+    "                    standard deviations (m, m, rad; default: none)\n"
     "  --motion-sigma S,W,Y  standard deviations of the change of the motion\n"
     "                    error from one pair to the next (m, m, rad; default\n"
     "                    0.01,0.01,0.01)\n"
@@ -251,7 +254,7 @@ int cmd_navigate(int argc, char **argv)
         {"cross-extent", required_argument, 0, 'X'}, {"surge-sigma", required_argument, 0, 'U'},
         {"range-extent", required_argument, 0, 'E'}, {"no-aiding", no_argument, 0, 'N'},
         {"no-resolve", no_argument, 0, 'R'}, {"motion-sigma", required_argument, 0, 'M'},
-        {"speed-lags", required_argument, 0, 'S'},
+        {"speed-lags", required_argument, 0, 'S'}, {"aiding-bias", required_argument, 0, 'B'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -304,6 +307,13 @@ int cmd_navigate(int argc, char **argv)
                 return cli_fail("navigate", 0, "--range-extent needs a length in (0, 100] m");
             break;
         case 'N': no.use_aiding = 0; break;
+        case 'B': {
+            double ab[3];
+            if (cli_parse_doubles(optarg, 3, ab) || !(ab[0] >= 0 && ab[1] >= 0 && ab[2] >= 0))
+                return cli_fail("navigate", 0, "--aiding-bias needs three standard deviations >= 0");
+            no.aiding_bias_sigma = (sasnav_pose){ab[0], ab[1], ab[2]};
+            break;
+        }
         case 'S':
             if (!strcmp(optarg, "none")) no.speed_lags = 0;
             else if (!strcmp(optarg, "dvl")) no.speed_lags = 1;

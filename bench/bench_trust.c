@@ -6,9 +6,11 @@
  *   dpca       DPCA baseline, joint resolution, no aiding
  *   aiding     the gyro and DVL alone (dead reckoning)
  *   fused      subspace + aiding (the pair estimates of 'subspace' reused)
+ *   fused+bias the same with a constant aiding error per interval estimated
+ *              jointly (--aiding-bias M, surge and sway, default 4e-4 m)
  *
  * usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE]
- *                    [--speed-lags 0|1|2]
+ *                    [--speed-lags 0|1|2] [--aiding-bias M]
  *
  * Seeds follow `sasnav simulate --seed S --aiding` (scene 3S+1, trajectory
  * 3S+2, noise 3S+3, aiding 3S+4). Prints one line per run and method, then
@@ -20,7 +22,8 @@
  * final sway within lambda/25. --pairs FILE writes one line per subspace
  * pair (first estimate: error, eta, margin, verdict, candidates) for the
  * calibration of the verdict. --speed-lags sets opts.speed_lags of the
- * subspace navigation (its estimates are reused by paper and fused). */
+ * subspace navigation (its estimates are reused by paper and fused);
+ * --aiding-bias M sets fused+bias's aiding_bias_sigma (surge and sway, m). */
 #include "sasnav/error.h"
 #include "sasnav/navigate.h"
 #include "sasnav/sim.h"
@@ -30,8 +33,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { M_PAPER, M_SUB, M_DPCA, M_AID, M_FUSED, N_METHODS };
-static const char *const names[N_METHODS] = {"paper", "subspace", "dpca", "aiding", "fused"};
+enum { M_PAPER, M_SUB, M_DPCA, M_AID, M_FUSED, M_FUSED_BIAS, N_METHODS };
+static const char *const names[N_METHODS] = {"paper", "subspace", "dpca", "aiding", "fused", "fused+bias"};
 
 typedef struct {
     double *final_sway, *final_surge, *final_yaw, *rms_sway;
@@ -60,6 +63,7 @@ int main(int argc, char **argv)
     long s0 = 1001, ns = 10;
     double snr = 30.0;
     int threads = 0, speed_lags = 0;
+    double aiding_bias = 4e-4;
     const char *pairs_path = NULL;
     for (int a = 1; a < argc; a++) {
         if (!strcmp(argv[a], "--seeds") && a + 2 < argc) {
@@ -70,6 +74,8 @@ int main(int argc, char **argv)
             snr = !strcmp(argv[a], "inf") ? INFINITY : atof(argv[a]);
         } else if (!strcmp(argv[a], "--threads") && a + 1 < argc) {
             threads = atoi(argv[++a]);
+        } else if (!strcmp(argv[a], "--aiding-bias") && a + 1 < argc) {
+            aiding_bias = atof(argv[++a]);
         } else if (!strcmp(argv[a], "--speed-lags") && a + 1 < argc) {
             speed_lags = atoi(argv[++a]);
         } else if (!strcmp(argv[a], "--pairs") && a + 1 < argc) {
@@ -97,7 +103,7 @@ int main(int argc, char **argv)
         if (!st[m].final_sway || !st[m].final_surge || !st[m].final_yaw || !st[m].rms_sway) return 1;
     }
     printf("paper-trajectory with aiding, SNR %g dB, seeds %ld..%ld\n", snr, s0, s0 + ns - 1);
-    printf("%6s %-9s %6s %9s %8s %14s %14s %12s %10s\n", "seed", "method", "slips", "unflagged",
+    printf("%6s %-10s %6s %9s %8s %14s %14s %12s %10s\n", "seed", "method", "slips", "unflagged",
            "flagged", "final sway mm", "final surge mm", "final yaw", "s/pair");
     for (long s = s0; s < s0 + ns; s++) {
         int r = (int)(s - s0);
@@ -116,18 +122,19 @@ int main(int argc, char **argv)
         }
         sasnav_navigation nav[N_METHODS];
         memset(nav, 0, sizeof nav);
-        int order[N_METHODS] = {M_SUB, M_PAPER, M_FUSED, M_DPCA, M_AID};
+        int order[N_METHODS] = {M_SUB, M_PAPER, M_FUSED, M_FUSED_BIAS, M_DPCA, M_AID};
         for (int k = 0; k < N_METHODS; k++) {
             int m = order[k];
             sasnav_navigate_opts o;
             sasnav_navigate_default_opts(&o);
             o.nthreads = threads;
-            o.use_aiding = m == M_FUSED || m == M_AID;
+            o.use_aiding = m == M_FUSED || m == M_FUSED_BIAS || m == M_AID;
             o.resolve = m != M_PAPER;
-            if (m == M_PAPER || m == M_FUSED) o.reuse = &nav[M_SUB];
+            if (m == M_PAPER || m == M_FUSED || m == M_FUSED_BIAS) o.reuse = &nav[M_SUB];
             if (m == M_DPCA) o.method = SASNAV_METHOD_DPCA;
             if (m == M_AID) o.method = SASNAV_METHOD_AIDING;
             if (m == M_SUB) o.speed_lags = speed_lags;
+            if (m == M_FUSED_BIAS) o.aiding_bias_sigma = (sasnav_pose){aiding_bias, aiding_bias, 0};
             if (sasnav_navigate(run, &o, &nav[m])) {
                 fprintf(stderr, "navigate (%s, seed %ld): %s\n", names[m], s, sasnav_last_error());
                 return 1;
@@ -156,7 +163,7 @@ int main(int argc, char **argv)
             st[m].flagged += flagged;
             st[m].pairs += nv->n_pairs;
             st[m].within += fabs(f.y) <= lambda / 25;
-            printf("%6ld %-9s %6d %9d %8d %+14.4f %+14.3f %+12.3e %10.2f\n", s, names[m], slips,
+            printf("%6ld %-10s %6d %9d %8d %+14.4f %+14.3f %+12.3e %10.2f\n", s, names[m], slips,
                    unflagged, flagged, 1e3 * f.y, 1e3 * f.x, f.theta, nv->seconds_per_pair);
         }
         if (pf) {

@@ -155,6 +155,14 @@ typedef struct {
                                  a DVL from the pairs' first estimates of
                                  surge, every ok pair then estimated again
                                  (local stages: about 1.8x the time) */
+    sasnav_pose aiding_bias_sigma; /* standard deviation of a constant error
+                                 of the aiding per ping interval (surge m,
+                                 sway m, yaw rad), estimated jointly with
+                                 the motion errors by the smoother: a DVL's
+                                 bias and scale factor at a steady speed
+                                 (e.g. 4e-4 m for 0.2 % + 1 mm/s at 2 m/s
+                                 and 0.1 s), a gyro's bias; 0 = none
+                                 (default) */
     const sasnav_navigation *reuse; /* a navigation of the same run by the
                                  same method and pair options: its pairs'
                                  first estimates (first_result) are used

@@ -126,24 +126,39 @@ static void tridiag_solve(int n, double *d, double *o, double *b)
 int fuse_smooth(int n, const sasnav_pose *m, const sasnav_pose *sm, const sasnav_pose *a,
                 const sasnav_pose *sa, sasnav_pose motion, double huber, sasnav_pose *e)
 {
+    return fuse_smooth_bias(n, m, sm, a, sa, motion, huber, (sasnav_pose){0, 0, 0}, e, NULL);
+}
+
+int fuse_smooth_bias(int n, const sasnav_pose *m, const sasnav_pose *sm, const sasnav_pose *a,
+                     const sasnav_pose *sa, sasnav_pose motion, double huber, sasnav_pose bias_sigma,
+                     sasnav_pose *e, sasnav_pose *bias)
+{
+    if (bias) *bias = (sasnav_pose){0, 0, 0};
     if (n < 1) return SASNAV_OK;
-    double *d = malloc(sizeof(double) * (size_t)n), *o = malloc(sizeof(double) * (size_t)n);
-    double *b = malloc(sizeof(double) * (size_t)n), *w = malloc(sizeof(double) * (size_t)n);
-    if (!d || !o || !b || !w) {
+    size_t sz = sizeof(double) * (size_t)n;
+    double *d = malloc(sz), *o = malloc(sz), *b = malloc(sz), *w = malloc(sz);
+    double *d2 = malloc(sz), *o2 = malloc(sz), *u = malloc(sz);
+    if (!d || !o || !b || !w || !d2 || !o2 || !u) {
         free(d);
         free(o);
         free(b);
         free(w);
+        free(d2);
+        free(o2);
+        free(u);
         return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the trajectory smoother");
     }
     /* A very weak prior on the motion error itself (1 m, 1 rad) keeps a
      * component that nothing observes at the nominal step. */
     const double prior_w = 1.0;
     for (int k = 0; k < 3; k++) {
-        double sk = comp(motion, k);
+        double sk = comp(motion, k), sb = comp(bias_sigma, k);
         double wm = isfinite(sk) && sk > 0 ? 1.0 / (sk * sk) : 0.0;
+        int with_bias = sb > 0 && isfinite(sb);
         for (int j = 0; j < n; j++) w[j] = 1.0;
+        double bk = 0;
         for (int iter = 0; iter < 5; iter++) {
+            double sum_wa = 0, sum_wa_a = 0;
             for (int j = 0; j < n; j++) {
                 double s1 = comp(sm[j], k), s2 = comp(sa[j], k);
                 double w1 = isfinite(s1) ? w[j] / (s1 * s1) : 0.0;
@@ -151,8 +166,30 @@ int fuse_smooth(int n, const sasnav_pose *m, const sasnav_pose *sm, const sasnav
                 d[j] = prior_w + w1 + w2 + (j > 0 ? wm : 0.0) + (j + 1 < n ? wm : 0.0);
                 o[j] = -wm;
                 b[j] = w1 * comp(m[j], k) + w2 * comp(a[j], k);
+                u[j] = w2;
+                sum_wa += w2;
+                sum_wa_a += w2 * comp(a[j], k);
             }
-            tridiag_solve(n, d, o, b);
+            if (with_bias && sum_wa > 0) {
+                /* Bordered system: T e + u b = r, u^T e + beta b = s. Solve
+                 * T x = r and T y = u (two copies of T: the solver works in
+                 * place), then b = (s - u^T x) / (beta - u^T y), e = x - y b. */
+                memcpy(d2, d, sz);
+                memcpy(o2, o, sz);
+                tridiag_solve(n, d, o, b);
+                tridiag_solve(n, d2, o2, u);
+                double ux = 0, uy = 0;
+                for (int j = 0; j < n; j++) {
+                    double s2 = comp(sa[j], k), w2 = isfinite(s2) ? 1.0 / (s2 * s2) : 0.0;
+                    ux += w2 * b[j];
+                    uy += w2 * u[j];
+                }
+                double beta = sum_wa + 1.0 / (sb * sb);
+                bk = (sum_wa_a - ux) / (beta - uy);
+                for (int j = 0; j < n; j++) b[j] -= u[j] * bk;
+            } else {
+                tridiag_solve(n, d, o, b);
+            }
             /* Huber weights of the estimates' residuals. */
             int changed = 0;
             for (int j = 0; j < n; j++) {
@@ -166,10 +203,14 @@ int fuse_smooth(int n, const sasnav_pose *m, const sasnav_pose *sm, const sasnav
             }
             if (!changed) break;
         }
+        if (bias) set_comp(bias, k, bk);
     }
     free(d);
     free(o);
     free(b);
     free(w);
+    free(d2);
+    free(o2);
+    free(u);
     return SASNAV_OK;
 }

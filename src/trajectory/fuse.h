@@ -40,4 +40,12 @@ int fuse_choose(int n, fuse_option *const *opts, const int *nopt, const sasnav_p
 int fuse_smooth(int n, const sasnav_pose *m, const sasnav_pose *sm, const sasnav_pose *a,
                 const sasnav_pose *sa, sasnav_pose motion, double huber, sasnav_pose *e);
 
+/* The same with a constant error of the aiding estimated jointly (a_j = e_j
+ * + b + noise; a DVL's bias and scale factor at a steady speed, a gyro's
+ * bias), b with standard deviation bias_sigma per component (0: not
+ * estimated, as fuse_smooth). Writes the estimate of b to *b (may be NULL). */
+int fuse_smooth_bias(int n, const sasnav_pose *m, const sasnav_pose *sm, const sasnav_pose *a,
+                     const sasnav_pose *sa, sasnav_pose motion, double huber, sasnav_pose bias_sigma,
+                     sasnav_pose *e, sasnav_pose *b);
+
 #endif

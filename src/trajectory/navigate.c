@@ -29,6 +29,7 @@ void sasnav_navigate_default_opts(sasnav_navigate_opts *opts)
     opts->eta_weight = 20.0;
     opts->aiding_gate = 5.0;
     opts->speed_lags = 0;
+    opts->aiding_bias_sigma = (sasnav_pose){0, 0, 0};
     opts->nthreads = 0;
     opts->progress = NULL;
     opts->progress_user = NULL;
@@ -186,6 +187,10 @@ static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
         return sasnav_set_error(SASNAV_ERR_ARG,
                                 "navigate: navigation by aiding alone needs a run with aiding "
                                 "measurements (and aiding and resolution enabled)");
+    if (!(o->aiding_bias_sigma.x >= 0) || !(o->aiding_bias_sigma.y >= 0) ||
+        !(o->aiding_bias_sigma.theta >= 0) ||
+        !isfinite(o->aiding_bias_sigma.x + o->aiding_bias_sigma.y + o->aiding_bias_sigma.theta))
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigate: aiding bias standard deviations must be finite and >= 0");
     if (o->speed_lags < 0 || o->speed_lags > 2)
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: speed_lags must be 0, 1 or 2");
     if (o->reuse && (o->reuse->method != o->method || o->reuse->n_pings != run->n_pings || !o->reuse->pairs))
@@ -538,7 +543,8 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
         m[j] = out->pairs[j].result.error;
         sm[j] = estimate_sigma(ctx, &out->pairs[j]);
     }
-    rc = fuse_smooth(n, m, sm, a, sa, o->motion_sigma, 3.0, e);
+    rc = fuse_smooth_bias(n, m, sm, a, sa, o->motion_sigma, 3.0,
+                          with_aiding ? o->aiding_bias_sigma : (sasnav_pose){0, 0, 0}, e, NULL);
     if (rc) goto done;
     for (int j = 0; j < n; j++) {
         sasnav_navigate_pair *np = &out->pairs[j];
