@@ -36,6 +36,22 @@ fi
 # Without aiding, same run.
 "$CLI" navigate "$T/run.h5" --k 2 --i 1 --range-extent 0.6 --no-aiding --json -o "$T/nav0.h5" > "$T/nav0.json" \
     2> "$T/nav0.err" || { cat "$T/nav0.err" >&2; fail "navigate --no-aiding"; }
+# Per-ping offsets from the pairs' surge (second pass) and from the DVL, and
+# the jointly estimated aiding bias: they run and keep the noise-free
+# fused yaw of a navigation-grade gyro.
+"$CLI" navigate "$T/run.h5" --k 2 --i 1 --range-extent 0.6 --no-aiding --speed-lags pairs \
+    -o "$T/navl.h5" > "$T/navl.txt" 2> "$T/navl.err" || { cat "$T/navl.err" >&2; fail "--speed-lags pairs"; }
+grep -q "final cumulative error" "$T/navl.txt" || fail "--speed-lags pairs: no summary"
+"$CLI" navigate "$T/run.h5" --k 2 --i 1 --range-extent 0.6 --speed-lags dvl --aiding-bias 4e-4,4e-4,0 \
+    --json -o "$T/navb.h5" > "$T/navb.json" 2> "$T/navb.err" || { cat "$T/navb.err" >&2; fail "--speed-lags dvl --aiding-bias"; }
+if [ -x /usr/bin/python3 ]; then
+    /usr/bin/python3 -c "
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d['aiding_used'] and all(abs(p['error']['yaw']) < 1e-5 for p in d['pairs']), d['pairs']
+" "$T/navb.json" || fail "--speed-lags dvl --aiding-bias: JSON content"
+fi
+
 # Dead reckoning.
 "$CLI" navigate "$T/run.h5" --method aiding --json -o "$T/nava.h5" > "$T/nava.json" \
     2> "$T/nava.err" || { cat "$T/nava.err" >&2; fail "navigate --method aiding"; }

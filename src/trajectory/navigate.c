@@ -340,6 +340,23 @@ static int agrees(const nav_ctx *ctx, sasnav_pose u, sasnav_pose v, sasnav_pose 
     return 1;
 }
 
+/* Makes a new estimate r of the pair its result: the new values, the
+ * first estimate's candidates, ambiguity and margin (what the data
+ * offered), time and cost added. */
+static void adopt_estimate(sasnav_navigate_pair *np, sasnav_pair_result *r)
+{
+    const sasnav_pair_result *old = &np->result;
+    r->n_candidates = old->n_candidates;
+    memcpy(r->candidates, old->candidates, sizeof r->candidates);
+    r->chosen = old->chosen;
+    r->ambiguity = old->ambiguity;
+    r->margin = old->margin;
+    r->seconds += old->seconds;
+    r->applications += old->applications;
+    r->evaluations += old->evaluations;
+    np->result = *r;
+}
+
 /* A new estimate of pair j from `start` (subspace only), kept when its eta
  * is lower than the present one's (or the present one failed) and, with
  * aiding, it agrees with the aiding. Returns a fatal code or OK; *taken
@@ -366,18 +383,7 @@ static int reestimate(nav_ctx *ctx, sasnav_navigate_pair *np, sasnav_pose start,
     double tol = isfinite(sa.x + sa.theta) ? ctx->opts->pair.verdict_margin_min : 1.0;
     int better = !usable(np) || !require_lower || r.eta < tol * np->result.eta;
     if (!better || !agrees(ctx, r.error, a, sa)) return SASNAV_OK;
-    /* Keep the first estimate's candidates (what the data offered), the
-     * new estimate's values, time and cost added. */
-    sasnav_pair_result old = np->result;
-    r.n_candidates = old.n_candidates;
-    memcpy(r.candidates, old.candidates, sizeof r.candidates);
-    r.chosen = old.chosen;
-    r.ambiguity = old.ambiguity;
-    r.margin = old.margin;
-    r.seconds += old.seconds;
-    r.applications += old.applications;
-    r.evaluations += old.evaluations;
-    np->result = r;
+    adopt_estimate(np, &r);
     np->status = r.status;
     *taken = 1;
     return SASNAV_OK;
@@ -650,15 +656,7 @@ static int second_pass(nav_ctx *ctx, sasnav_navigation *out)
             continue;
         }
         if (rc || r.verdict != SASNAV_VERDICT_OK) continue; /* keep the first estimate */
-        r.n_candidates = np->result.n_candidates;
-        memcpy(r.candidates, np->result.candidates, sizeof r.candidates);
-        r.chosen = np->result.chosen;
-        r.ambiguity = np->result.ambiguity;
-        r.margin = np->result.margin;
-        r.seconds += np->result.seconds;
-        r.applications += np->result.applications;
-        r.evaluations += np->result.evaluations;
-        np->result = r;
+        adopt_estimate(np, &r);
         np->status = r.status;
         np->first_result = r;
         np->first_status = r.status;
