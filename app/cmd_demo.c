@@ -78,20 +78,6 @@ static void progress_bar(const sasnav_navigate_progress *pr, void *user)
     fflush(stderr);
 }
 
-/* |<a, b>| / (||a|| ||b||) over the whole grid. */
-static double correlation(const sasnav_cfloat *a, const sasnav_cfloat *b, size_t n)
-{
-    double re = 0, im = 0, na = 0, nb = 0;
-    for (size_t j = 0; j < n; j++) {
-        double ar = crealf(a[j]), ai = cimagf(a[j]), br = crealf(b[j]), bi = cimagf(b[j]);
-        re += ar * br + ai * bi; /* conj(a) b */
-        im += ar * bi - ai * br;
-        na += ar * ar + ai * ai;
-        nb += br * br + bi * bi;
-    }
-    return na > 0 && nb > 0 ? hypot(re, im) / sqrt(na * nb) : 0.0;
-}
-
 static int simulate(demo *d)
 {
     double t0 = sasnav_now_seconds();
@@ -160,7 +146,7 @@ static int images(demo *d)
     }
     d->seconds_images = sasnav_now_seconds() - t0;
     for (int k = 0; k < N_IMAGES; k++) {
-        d->correlation[k] = correlation(d->image[k], d->image[1], np);
+        d->correlation[k] = sasnav_image_correlation(d->image[k], d->image[1], NULL, np);
         char name[64], path[4096], title[128];
         snprintf(name, sizeof name, "image-%s.png", image_name[k]);
         path_in(d, name, path, sizeof path);

@@ -39,32 +39,6 @@ static const char *help =
     "  --threads N       OpenMP threads (default: all cores)\n"
     "  -o FILE           output navigation (HDF5, with the run's truth if any)\n";
 
-/* Rms along- and across-track error of the centroids after the rigid motion
- * that best fits them onto the true ones (a common move and turn of the
- * whole trajectory is not observable), m. Returns nonzero on no memory. */
-static int rms_rigid(const sasnav_run *run, const sasnav_ping_pose *nav, double *su, double *sw)
-{
-    int n = run->n_pings;
-    sasnav_pose *a = malloc(sizeof *a * n), *t = malloc(sizeof *t * n);
-    int rc = a && t ? SASNAV_OK : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-    if (!rc) rc = sasnav_traj_centroids(nav, n, a);
-    if (!rc) rc = sasnav_traj_centroids(run->truth, n, t);
-    if (!rc) {
-        sasnav_pose m = sasnav_traj_rigid_fit(a, t, n);
-        double ex = 0, ey = 0;
-        for (int p = 0; p < n; p++) {
-            sasnav_pose e = sasnav_pose_compose(m, a[p]);
-            ex += (e.x - t[p].x) * (e.x - t[p].x);
-            ey += (e.y - t[p].y) * (e.y - t[p].y);
-        }
-        *su = sqrt(ex / n);
-        *sw = sqrt(ey / n);
-    }
-    free(a);
-    free(t);
-    return rc;
-}
-
 int cmd_refine(int argc, char **argv)
 {
     static const struct option longopts[] = {
@@ -141,7 +115,8 @@ int cmd_refine(int argc, char **argv)
            1e3 * rep.mean_move_sway);
     if (run->truth) {
         double a0, b0, a1, b1;
-        if (!rms_rigid(run, nav, &a0, &b0) && !rms_rigid(run, out, &a1, &b1))
+        if (!sasnav_traj_rms_rigid(nav, run->truth, run->n_pings, &a0, &b0) &&
+            !sasnav_traj_rms_rigid(out, run->truth, run->n_pings, &a1, &b1))
             printf("rms error vs the truth (best rigid fit): surge %.3f -> %.3f mm, sway %.3f -> %.3f mm\n",
                    1e3 * a0, 1e3 * a1, 1e3 * b0, 1e3 * b1);
     }

@@ -24,25 +24,6 @@
 #include <string.h>
 #include <sys/resource.h>
 
-static void rms_rigid(const sasnav_ping_pose *nav, const sasnav_ping_pose *truth, int n, double *su, double *sw)
-{
-    sasnav_pose *a = malloc(sizeof *a * n), *t = malloc(sizeof *t * n);
-    *su = *sw = NAN;
-    if (a && t && !sasnav_traj_centroids(nav, n, a) && !sasnav_traj_centroids(truth, n, t)) {
-        sasnav_pose m = sasnav_traj_rigid_fit(a, t, n);
-        double ex = 0, ey = 0;
-        for (int p = 0; p < n; p++) {
-            sasnav_pose e = sasnav_pose_compose(m, a[p]);
-            ex += (e.x - t[p].x) * (e.x - t[p].x);
-            ey += (e.y - t[p].y) * (e.y - t[p].y);
-        }
-        *su = sqrt(ex / n);
-        *sw = sqrt(ey / n);
-    }
-    free(a);
-    free(t);
-}
-
 int main(int argc, char **argv)
 {
     const char *run_path = NULL, *nav_path = NULL;
@@ -103,8 +84,8 @@ int main(int argc, char **argv)
         return 1;
     }
     double su0, sw0, su1, sw1;
-    rms_rigid(start, run->truth, n, &su0, &sw0);
-    rms_rigid(out, run->truth, n, &su1, &sw1);
+    if (sasnav_traj_rms_rigid(start, run->truth, n, &su0, &sw0)) su0 = sw0 = NAN;
+    if (sasnav_traj_rms_rigid(out, run->truth, n, &su1, &sw1)) su1 = sw1 = NAN;
     printf("run %s: %d pings x %d channels x %d samples; start %s\n", run_path, n, run->array.n_rx,
            run->win.n_samples, nav_path ? nav_path : "truth + seeded errors");
     for (int s = 0; s < rep.sweeps; s++)

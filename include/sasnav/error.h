@@ -42,6 +42,15 @@ int sasnav_set_error(int status, const char *fmt, ...)
 #endif
     ;
 
+/* Prefixes the last-error message of this thread with a formatted context
+ * ("<context>: <previous message>") and returns `status`; for callers that
+ * add where a failure happened (a file, a ping) to what went wrong. */
+int sasnav_prefix_error(int status, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
 /* Clears the last-error message of this thread. */
 void sasnav_clear_error(void);
 

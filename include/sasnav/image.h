@@ -5,6 +5,8 @@
 #include "sasnav/op.h"
 #include "sasnav/run.h"
 
+#include <stddef.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -39,6 +41,12 @@ typedef struct {
     int iterations;   /* k, default 5 */
     double tikhonov;  /* lambda >= 0: minimises ||T x - d||^2 + lambda ||x||^2 (default 0) */
 } sasnav_cgls_opts;
+
+/* Normalised correlation |<a, b>| / (||a|| ||b||) of two complex images of
+ * n pixels, over the pixels where region[j] != 0 (region NULL: all); 0 when
+ * either image is zero there. Insensitive to a common phase and scale. */
+double sasnav_image_correlation(const sasnav_cfloat *a, const sasnav_cfloat *b,
+                                const unsigned char *region, size_t n);
 
 void sasnav_cgls_default_opts(sasnav_cgls_opts *opts);
 

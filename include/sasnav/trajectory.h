@@ -53,6 +53,13 @@ int sasnav_traj_centroids(const sasnav_ping_pose *pings, int n, sasnav_pose *cen
  * points coincide). */
 sasnav_pose sasnav_traj_rigid_fit(const sasnav_pose *a, const sasnav_pose *b, int n);
 
+/* Rms along-track (*surge_rms) and across-track (*sway_rms) error, m, of the
+ * centroids of `nav` after the rigid motion that best fits them onto those
+ * of `truth` (sasnav_traj_rigid_fit: a common move and turn of a whole
+ * trajectory is not observable from pairs). SASNAV_ERR_ARG, _NOMEM. */
+int sasnav_traj_rms_rigid(const sasnav_ping_pose *nav, const sasnav_ping_pose *truth, int n,
+                          double *surge_rms, double *sway_rms);
+
 /* One relative measurement: the displacement of ping q's centroid in ping
  * p's centroid frame, with the standard deviations of its surge, sway and
  * yaw (all > 0; the residuals are divided by them). */

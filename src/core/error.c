@@ -37,3 +37,18 @@ int sasnav_set_error(int status, const char *fmt, ...)
     va_end(ap);
     return status;
 }
+
+int sasnav_prefix_error(int status, const char *fmt, ...)
+{
+    char detail[sizeof last_message], prefix[sizeof last_message];
+    snprintf(detail, sizeof detail, "%s", last_message);
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(prefix, sizeof prefix, fmt, ap);
+    va_end(ap);
+    /* longer messages are cut at the buffer's size (the return value says by
+     * how much; nothing to do about it) */
+    if (snprintf(last_message, sizeof last_message, "%s: %s", prefix, detail) < 0)
+        last_message[0] = '\0';
+    return status;
+}

@@ -38,43 +38,6 @@ double sasnav_wrap_angle(double theta)
     return t - M_PI;
 }
 
-int sasnav_array_check(const sasnav_array *array)
-{
-    if (!array) return sasnav_set_error(SASNAV_ERR_ARG, "array description is NULL");
-    if (array->n_rx < 1 || array->n_rx > SASNAV_MAX_RX)
-        return sasnav_set_error(SASNAV_ERR_ARG, "array needs 1..%d receivers, got %d",
-                                SASNAV_MAX_RX, array->n_rx);
-    if (!isfinite(array->rx_length) || array->rx_length < 0 || !isfinite(array->tx_length) ||
-        array->tx_length < 0)
-        return sasnav_set_error(SASNAV_ERR_ARG, "element lengths must be finite and >= 0");
-    if (!isfinite(array->rx_height) || !isfinite(array->tx_height))
-        return sasnav_set_error(SASNAV_ERR_ARG, "sensor heights must be finite");
-    for (int l = 0; l < array->n_rx; l++)
-        if (!isfinite(array->rx_u[l]))
-            return sasnav_set_error(SASNAV_ERR_ARG, "receiver %d position is not finite", l);
-    return SASNAV_OK;
-}
-
-int sasnav_array_uniform(sasnav_array *array, int n, double spacing, double length,
-                         double tx_length)
-{
-    if (!array) return sasnav_set_error(SASNAV_ERR_ARG, "array is NULL");
-    if (n < 1 || n > SASNAV_MAX_RX)
-        return sasnav_set_error(SASNAV_ERR_ARG, "array needs 1..%d receivers, got %d",
-                                SASNAV_MAX_RX, n);
-    if (!(spacing > 0) || !isfinite(spacing))
-        return sasnav_set_error(SASNAV_ERR_ARG, "receiver spacing must be > 0, got %g", spacing);
-    sasnav_array a = {0};
-    a.n_rx = n;
-    for (int l = 0; l < n; l++) a.rx_u[l] = (l - 0.5 * (n - 1)) * spacing;
-    a.rx_length = length;
-    a.tx_length = tx_length;
-    int rc = sasnav_array_check(&a);
-    if (rc) return rc;
-    *array = a;
-    return SASNAV_OK;
-}
-
 sasnav_pose sasnav_ping_centroid(const sasnav_ping_pose *ping)
 {
     sasnav_pose c = {0.5 * (ping->array.x + ping->tx.x), 0.5 * (ping->array.y + ping->tx.y),

@@ -3,6 +3,8 @@
 #include "sasnav/error.h"
 #include "sasnav/image.h"
 
+#include <complex.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -35,4 +37,20 @@ int sasnav_backproject(const sasnav_run *run, const sasnav_ping_pose *nav,
     }
     sasnav_op_destroy(op);
     return rc;
+}
+
+double sasnav_image_correlation(const sasnav_cfloat *a, const sasnav_cfloat *b,
+                                const unsigned char *region, size_t n)
+{
+    if (!a || !b) return 0.0;
+    double re = 0, im = 0, na = 0, nb = 0;
+    for (size_t j = 0; j < n; j++) {
+        if (region && !region[j]) continue;
+        double ar = crealf(a[j]), ai = cimagf(a[j]), br = crealf(b[j]), bi = cimagf(b[j]);
+        re += ar * br + ai * bi; /* conj(a) b */
+        im += ar * bi - ai * br;
+        na += ar * ar + ai * ai;
+        nb += br * br + bi * bi;
+    }
+    return na > 0 && nb > 0 ? hypot(re, im) / sqrt(na * nb) : 0.0;
 }

@@ -5,6 +5,7 @@
 #include "sasnav/airsas.h"
 #include "sasnav/error.h"
 #include "sasnav/geometry.h"
+#include "io/textfile.h"
 
 #include <errno.h>
 #include <math.h>
@@ -20,61 +21,6 @@
 #define MAX_CHANNELS 64
 
 /* ------------------------------------------------------------ text files */
-
-/* Records "<prefix>: <the current last error>" (copied first: the message
- * buffer is both source and destination). */
-static int prefix_error(int status, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
-static int prefix_error(int status, const char *fmt, ...)
-{
-    char detail[512], prefix[512];
-    snprintf(detail, sizeof detail, "%s", sasnav_last_error());
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(prefix, sizeof prefix, fmt, ap);
-    va_end(ap);
-    return sasnav_set_error(status, "%s: %s", prefix, detail);
-}
-
-/* Reads a whole regular file into a NUL-terminated buffer. */
-static int read_text(const char *path, char **text)
-{
-    *text = NULL;
-    FILE *f = fopen(path, "rb");
-    if (!f) return sasnav_set_error(SASNAV_ERR_IO, "cannot open %s: %s", path, strerror(errno));
-    struct stat st;
-    if (fstat(fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) {
-        fclose(f);
-        return sasnav_set_error(SASNAV_ERR_IO, "%s is not a regular file", path);
-    }
-    if (st.st_size > MAX_FILE_BYTES) {
-        fclose(f);
-        return sasnav_set_error(SASNAV_ERR_FORMAT, "%s is too large (%lld bytes)", path,
-                                (long long)st.st_size);
-    }
-    char *buf = malloc((size_t)st.st_size + 1);
-    if (!buf) {
-        fclose(f);
-        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory reading %s", path);
-    }
-    size_t n = fread(buf, 1, (size_t)st.st_size, f);
-    int bad = ferror(f);
-    fclose(f);
-    if (bad) {
-        free(buf);
-        return sasnav_set_error(SASNAV_ERR_IO, "cannot read %s", path);
-    }
-    buf[n] = '\0';
-    if (memchr(buf, '\0', n)) {
-        free(buf);
-        return sasnav_set_error(SASNAV_ERR_FORMAT, "%s is not a text file (NUL byte)", path);
-    }
-    *text = buf;
-    return SASNAV_OK;
-}
 
 /* Next line of *cursor (NUL-terminated in place, "\r\n" or "\n"); NULL at the
  * end. */
@@ -135,22 +81,14 @@ static int parse_row(const char *line, double *vals, int max)
     }
 }
 
-static int path_join(char *out, size_t size, const char *dir, const char *name)
-{
-    int k = snprintf(out, size, "%s/%s", dir, name);
-    if (k < 0 || (size_t)k >= size)
-        return sasnav_set_error(SASNAV_ERR_ARG, "path too long: %s/%s", dir, name);
-    return SASNAV_OK;
-}
-
 /* ------------------------------------------------------ metadata files */
 
 static int read_coordinates(const char *dir, sasnav_airsas *r)
 {
     char path[4096];
-    int rc = path_join(path, sizeof path, dir, "Coordinates.csv");
+    int rc = sasnav_path_join(path, sizeof path, dir, "Coordinates.csv");
     char *text = NULL;
-    if (!rc) rc = read_text(path, &text);
+    if (!rc) rc = sasnav_text_read(path, MAX_FILE_BYTES, SASNAV_ERR_FORMAT, &text, NULL);
     if (rc) return rc;
     int cap = 512, n = 0, line_no = 0;
     r->angle_deg = malloc(sizeof(double) * cap);
@@ -216,9 +154,9 @@ typedef struct {
 static int read_sysparams(const char *dir, sasnav_airsas *r)
 {
     char path[4096];
-    int rc = path_join(path, sizeof path, dir, "SysParams.csv");
+    int rc = sasnav_path_join(path, sizeof path, dir, "SysParams.csv");
     char *text = NULL;
-    if (!rc) rc = read_text(path, &text);
+    if (!rc) rc = sasnav_text_read(path, MAX_FILE_BYTES, SASNAV_ERR_FORMAT, &text, NULL);
     if (rc) return rc;
     const sys_key keys[] = {
         {"Speaker x", &r->speaker[0], 1}, {"Speaker y", &r->speaker[1], 1},
@@ -282,9 +220,9 @@ static int parse_with_unit(const char *token, const char *unit, double *v)
 static int read_waveform(const char *dir, sasnav_airsas *r)
 {
     char path[4096];
-    int rc = path_join(path, sizeof path, dir, "WaveformParams.csv");
+    int rc = sasnav_path_join(path, sizeof path, dir, "WaveformParams.csv");
     char *text = NULL;
-    if (!rc) rc = read_text(path, &text);
+    if (!rc) rc = sasnav_text_read(path, MAX_FILE_BYTES, SASNAV_ERR_FORMAT, &text, NULL);
     if (rc) return rc;
     char *cursor = text, *line = next_line(&cursor);
     while (line && blank(line)) line = next_line(&cursor);
@@ -318,7 +256,7 @@ static int read_waveform(const char *dir, sasnav_airsas *r)
     r->lfm.tukey = ratio;
     r->drive_volts = volts;
     if (!sasnav_lfm_length(&r->lfm, r->sample_rate))
-        return prefix_error(SASNAV_ERR_FORMAT, "%s", path);
+        return sasnav_prefix_error(SASNAV_ERR_FORMAT, "%s", path);
     return SASNAV_OK;
 }
 
@@ -330,9 +268,9 @@ static int read_flight(const char *dir, int p, sasnav_airsas *r, double **rows, 
 {
     char name[64], path[4096];
     snprintf(name, sizeof name, "Flight-%06d.csv", p + 1);
-    int rc = path_join(path, sizeof path, dir, name);
+    int rc = sasnav_path_join(path, sizeof path, dir, name);
     char *text = NULL;
-    if (!rc) rc = read_text(path, &text);
+    if (!rc) rc = sasnav_text_read(path, MAX_FILE_BYTES, SASNAV_ERR_FORMAT, &text, NULL);
     if (rc) return rc;
     int n = 0, line_no = 0;
     char *cursor = text, *line;
@@ -422,219 +360,5 @@ int sasnav_airsas_read(const char *dir, sasnav_airsas **rec)
         return rc;
     }
     *rec = r;
-    return SASNAV_OK;
-}
-
-/* ------------------------------------------------------------ processing */
-
-void sasnav_airsas_default_opts(sasnav_airsas_opts *opts)
-{
-    if (!opts) return;
-    memset(opts, 0, sizeof *opts);
-    opts->radius = 0.85;
-    opts->microphone = 1;
-    opts->ping_stride = 1;
-    opts->remove_room = 1;
-    opts->decimation = 4;
-    opts->compression = SASNAV_COMPRESS_MODEL;
-    opts->taper = SASNAV_TAPER_NONE;
-    opts->clip_run = 3;
-}
-
-int sasnav_airsas_remove_room(int n_pings, int n, float *ts)
-{
-    if (!ts || n_pings < 1 || n < 1)
-        return sasnav_set_error(SASNAV_ERR_ARG, "room removal: need records (%d pings x %d samples)",
-                                n_pings, n);
-    double *cm = calloc((size_t)n, sizeof *cm);
-    if (!cm) return sasnav_set_error(SASNAV_ERR_NOMEM, "room removal: out of memory");
-    for (int p = 0; p < n_pings; p++)
-        for (int m = 0; m < n; m++) cm[m] += ts[(size_t)p * n + m];
-    for (int m = 0; m < n; m++) cm[m] /= n_pings;
-    for (int p = 0; p < n_pings; p++) {
-        float *x = ts + (size_t)p * n;
-        for (int m = 0; m < n; m++) {
-            /* arg of a real number: 0 for >= 0 (numpy's angle(0) = 0), pi below */
-            double arg_cm = cm[m] < 0 ? M_PI : 0.0, arg_ts = x[m] < 0 ? M_PI : 0.0;
-            double dang = sasnav_wrap_angle(arg_cm - arg_ts);
-            double beta = 1.0 / (1.0 + dang * dang);
-            double dmag = fabs(cm[m]) - fabs((double)x[m]);
-            double alpha = 1.0 / (1.0 + dmag * dmag);
-            double sign = x[m] < 0 ? -1.0 : 1.0; /* exp(j arg(ts)) */
-            x[m] = (float)(x[m] - alpha * beta * fabs(cm[m]) * sign);
-        }
-    }
-    free(cm);
-    return SASNAV_OK;
-}
-
-static int opts_check(const sasnav_airsas *rec, const sasnav_airsas_opts *o)
-{
-    if (!isfinite(o->radius) || !(o->radius > 0))
-        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: radius must be > 0, got %g m", o->radius);
-    if (o->microphone != 1 && o->microphone != 2)
-        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: microphone must be 1 or 2, got %d", o->microphone);
-    if (o->microphone > rec->n_channels)
-        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: microphone %d asked, the flights have %d column(s)",
-                                o->microphone, rec->n_channels);
-    if (o->microphone == 2 && !rec->has_mic2)
-        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: SysParams.csv gives no Mic2 position");
-    if (o->first_ping < 0 || o->first_ping >= rec->n_pings)
-        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: first ping %d outside 0..%d", o->first_ping,
-                                rec->n_pings - 1);
-    if (o->ping_stride < 1)
-        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: ping stride must be >= 1, got %d", o->ping_stride);
-    if (o->max_pings < 0)
-        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: max_pings must be >= 0, got %d", o->max_pings);
-    if (!isfinite(o->f0) || o->f0 < 0 || !isfinite(o->bandwidth) || o->bandwidth < 0)
-        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: f0 and bandwidth must be >= 0 (0: from the chirp)");
-    for (int p = 1; p < rec->n_pings; p++)
-        if (fabs(rec->height_mm[p] - rec->height_mm[0]) > 1e-6)
-            return sasnav_set_error(SASNAV_ERR_ARG,
-                                    "airsas: flight %d is at height %g mm, flight 1 at %g mm (one "
-                                    "array height per run)",
-                                    p + 1, rec->height_mm[p], rec->height_mm[0]);
-    return SASNAV_OK;
-}
-
-static int background_check(const sasnav_airsas *rec, const sasnav_airsas *bg)
-{
-    if (bg->n_pings != rec->n_pings || bg->n_samples != rec->n_samples ||
-        bg->n_channels != rec->n_channels)
-        return sasnav_set_error(SASNAV_ERR_ARG,
-                                "airsas: the background has %d pings x %d samples x %d channels, "
-                                "the recording %d x %d x %d",
-                                bg->n_pings, bg->n_samples, bg->n_channels, rec->n_pings,
-                                rec->n_samples, rec->n_channels);
-    if (bg->sample_rate != rec->sample_rate)
-        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: the background is sampled at %g Hz, the recording at %g Hz",
-                                bg->sample_rate, rec->sample_rate);
-    return SASNAV_OK;
-}
-
-/* Raw records of one microphone, minus the background: ts[p * n + m]. The
- * raw records (and the background's) are checked by the ingest plan first
- * (finite, not clipped). */
-static int gather_records(const sasnav_airsas *rec, const sasnav_airsas *bg, int mic,
-                          const sasnav_ingest *check, float **out)
-{
-    size_t n = (size_t)rec->n_samples;
-    float *ts = malloc(sizeof(float) * n * (size_t)rec->n_pings);
-    if (!ts) return sasnav_set_error(SASNAV_ERR_NOMEM, "airsas: out of memory");
-    for (int p = 0; p < rec->n_pings; p++) {
-        const float *x = rec->samples + ((size_t)p * rec->n_channels + mic) * n;
-        const float *b = bg ? bg->samples + ((size_t)p * bg->n_channels + mic) * n : NULL;
-        int rc = sasnav_ingest_check_record(check, 1, x);
-        const char *which = "";
-        if (!rc && b) {
-            rc = sasnav_ingest_check_record(check, 1, b);
-            which = " (background)";
-        }
-        if (rc) {
-            free(ts);
-            return prefix_error(rc, "airsas: flight %d%s", p + 1, which);
-        }
-        for (size_t m = 0; m < n; m++) ts[(size_t)p * n + m] = b ? x[m] - b[m] : x[m];
-    }
-    *out = ts;
-    return SASNAV_OK;
-}
-
-static int make_plan(const sasnav_airsas *rec, const sasnav_airsas_opts *o, sasnav_ingest **plan)
-{
-    int nc = sasnav_lfm_length(&rec->lfm, rec->sample_rate);
-    if (nc < 1) return SASNAV_ERR_ARG;
-    float *chirp = malloc(sizeof(float) * (size_t)nc);
-    if (!chirp) return sasnav_set_error(SASNAV_ERR_NOMEM, "airsas: out of memory");
-    int rc = sasnav_lfm_samples(&rec->lfm, rec->sample_rate, nc, chirp);
-    sasnav_ingest_opts io;
-    sasnav_ingest_default_opts(&io);
-    io.sample_rate = rec->sample_rate;
-    io.t_start = -rec->group_delay / rec->sample_rate;
-    io.f0 = o->f0 > 0 ? o->f0 : 0.5 * (rec->lfm.f_start + rec->lfm.f_end);
-    io.bandwidth = o->bandwidth > 0 ? o->bandwidth : fabs(rec->lfm.f_end - rec->lfm.f_start);
-    io.decimation = o->decimation;
-    io.compression = o->compression;
-    io.taper = o->taper;
-    io.clip_run = o->clip_run;
-    if (!rc) rc = sasnav_ingest_create(&io, rec->n_samples, chirp, nc, plan);
-    free(chirp);
-    return rc;
-}
-
-/* The circle: ping p at a = 90 - angle degrees, yaw a + 90 degrees. */
-static sasnav_ping_pose circle_pose(double radius, double angle_deg)
-{
-    double a = (90.0 - angle_deg) * M_PI / 180.0;
-    sasnav_pose pose = {radius * cos(a), radius * sin(a), sasnav_wrap_angle(a + 0.5 * M_PI)};
-    sasnav_ping_pose ping = {pose, pose};
-    return ping;
-}
-
-int sasnav_airsas_to_run(const sasnav_airsas *rec, const sasnav_airsas *background,
-                         const sasnav_airsas_opts *opts, sasnav_run **run)
-{
-    if (!run) return sasnav_set_error(SASNAV_ERR_ARG, "airsas: run output pointer is NULL");
-    *run = NULL;
-    if (!rec || !rec->samples) return sasnav_set_error(SASNAV_ERR_ARG, "airsas: no recording");
-    sasnav_airsas_opts o;
-    if (opts)
-        o = *opts;
-    else
-        sasnav_airsas_default_opts(&o);
-    int rc = opts_check(rec, &o);
-    if (!rc && background) rc = background_check(rec, background);
-    if (rc) return rc;
-
-    /* Kept pings. */
-    int n_keep = (rec->n_pings - 1 - o.first_ping) / o.ping_stride + 1;
-    if (o.max_pings > 0 && n_keep > o.max_pings) n_keep = o.max_pings;
-
-    sasnav_ingest *plan = NULL;
-    rc = make_plan(rec, &o, &plan);
-    if (rc) return rc;
-    float *ts = NULL;
-    rc = gather_records(rec, background, o.microphone - 1, plan, &ts);
-    if (!rc && o.remove_room) rc = sasnav_airsas_remove_room(rec->n_pings, rec->n_samples, ts);
-
-    sasnav_system sys;
-    sasnav_system_default(&sys);
-    double t_mean = 0;
-    for (int p = 0; p < rec->n_pings; p++) t_mean += rec->temperature[p];
-    t_mean /= rec->n_pings;
-    sys.sound_speed = 331.4 + 0.6 * t_mean;
-    sys.attenuation = SASNAV_ATTEN_NONE;
-    sys.beam_pattern = 0;
-    sasnav_array array;
-    memset(&array, 0, sizeof array);
-    array.n_rx = 1;
-    double h = rec->height_mm[0] / 1000.0 - rec->center[2];
-    array.tx_height = rec->speaker[2] + h;
-    array.rx_height = rec->mic[o.microphone - 1][2] + h;
-    sasnav_window win;
-    sasnav_run *r = NULL;
-    if (!rc) rc = sasnav_ingest_system(plan, &sys);
-    if (!rc) rc = sasnav_ingest_window(plan, &win);
-    if (!rc) rc = sasnav_run_alloc(&sys, &array, &win, n_keep, 0, &r);
-    for (int k = 0; !rc && k < n_keep; k++) {
-        int p = o.first_ping + k * o.ping_stride;
-        rc = sasnav_ingest_execute(plan, 1, ts + (size_t)p * rec->n_samples, sasnav_run_ping(r, k));
-        if (rc) rc = prefix_error(rc, "airsas: flight %d", p + 1);
-        r->nav[k] = circle_pose(o.radius, rec->angle_deg[p]);
-    }
-    free(ts);
-    sasnav_ingest_destroy(plan);
-    if (rc) {
-        sasnav_run_free(r);
-        return rc;
-    }
-    double step = n_keep > 1 ? fabs(rec->angle_deg[o.first_ping + o.ping_stride] -
-                                    rec->angle_deg[o.first_ping])
-                             : 0.0;
-    r->ping_spacing = o.radius * step * M_PI / 180.0;
-    r->speed = 0;
-    r->tx_lag = 0;
-    r->range_of_interest = o.radius;
-    *run = r;
     return SASNAV_OK;
 }

@@ -794,38 +794,6 @@ static int cross_check(loader *L)
 
 /* ---- reading the file ---- */
 
-static int read_file(const char *path, char **text, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return sasnav_set_error(SASNAV_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
-    struct stat sb;
-    if (fstat(fileno(f), &sb) != 0 || !S_ISREG(sb.st_mode)) {
-        fclose(f);
-        return sasnav_set_error(SASNAV_ERR_IO, "%s: not a regular file", path);
-    }
-    if (sb.st_size > CONFIG_MAX_BYTES) {
-        fclose(f);
-        return sasnav_set_error(SASNAV_ERR_CONFIG, "%s: too large for a configuration (%lld bytes)",
-                                path, (long long)sb.st_size);
-    }
-    char *buf = malloc((size_t)sb.st_size + 1);
-    if (!buf) {
-        fclose(f);
-        return sasnav_set_error(SASNAV_ERR_NOMEM, "%s: out of memory", path);
-    }
-    size_t got = fread(buf, 1, (size_t)sb.st_size, f);
-    int bad = ferror(f);
-    fclose(f);
-    if (bad) {
-        free(buf);
-        return sasnav_set_error(SASNAV_ERR_IO, "%s: read error", path);
-    }
-    buf[got] = '\0';
-    *text = buf;
-    *len = got;
-    return SASNAV_OK;
-}
-
 static void diag_discard(struct fy_diag *diag, void *user, const char *buf, size_t len)
 {
     (void)diag, (void)user, (void)buf, (void)len;
@@ -929,7 +897,7 @@ int sasnav_config_load(const char *path, sasnav_scenario *sc)
     if (!path || !sc) return sasnav_set_error(SASNAV_ERR_ARG, "config_load: NULL argument");
     char *text = NULL;
     size_t len = 0;
-    int rc = read_file(path, &text, &len);
+    int rc = sasnav_text_read(path, CONFIG_MAX_BYTES, SASNAV_ERR_CONFIG, &text, &len);
     if (rc) return rc;
 
     loader *L = calloc(1, sizeof *L);
@@ -949,11 +917,8 @@ int sasnav_config_load(const char *path, sasnav_scenario *sc)
     if (!rc && root) rc = apply_image(L);
     if (!rc && root) rc = apply_pair(L);
     if (!rc) rc = cross_check(L);
-    if (!rc && sasnav_scenario_check(&L->sc) != SASNAV_OK) {
-        char why[400];
-        snprintf(why, sizeof why, "%s", sasnav_last_error());
-        rc = sasnav_set_error(SASNAV_ERR_CONFIG, "%s: invalid scenario: %s", path, why);
-    }
+    if (!rc && sasnav_scenario_check(&L->sc) != SASNAV_OK)
+        rc = sasnav_prefix_error(SASNAV_ERR_CONFIG, "%s: invalid scenario", path);
     if (!rc) *sc = L->sc;
     c_numeric_leave(&locale);
     if (doc) fy_document_destroy(doc);

@@ -1,9 +1,10 @@
-/* Atomic text outputs (textfile.h). */
+/* Whole-file text reads, path joins and atomic text outputs (textfile.h). */
 #include "io/textfile.h"
 
 #include "sasnav/error.h"
 
 #include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -60,4 +61,50 @@ void sasnav_text_abort(sasnav_text_out *out)
     if (out->f) fclose(out->f);
     out->f = NULL;
     if (out->tmp[0]) unlink(out->tmp);
+}
+
+int sasnav_text_read(const char *path, long max_bytes, int bad_content, char **text, size_t *len)
+{
+    *text = NULL;
+    if (len) *len = 0;
+    FILE *f = fopen(path, "rb");
+    if (!f) return sasnav_set_error(SASNAV_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    struct stat st;
+    if (fstat(fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) {
+        fclose(f);
+        return sasnav_set_error(SASNAV_ERR_IO, "%s: not a regular file", path);
+    }
+    if (st.st_size > max_bytes) {
+        fclose(f);
+        return sasnav_set_error(bad_content, "%s: too large (%lld bytes, at most %ld)", path,
+                                (long long)st.st_size, max_bytes);
+    }
+    char *buf = malloc((size_t)st.st_size + 1);
+    if (!buf) {
+        fclose(f);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "%s: out of memory", path);
+    }
+    size_t n = fread(buf, 1, (size_t)st.st_size, f);
+    int bad = ferror(f);
+    fclose(f);
+    if (bad) {
+        free(buf);
+        return sasnav_set_error(SASNAV_ERR_IO, "%s: read error", path);
+    }
+    buf[n] = '\0';
+    if (memchr(buf, '\0', n)) {
+        free(buf);
+        return sasnav_set_error(bad_content, "%s: not a text file (NUL byte)", path);
+    }
+    *text = buf;
+    if (len) *len = n;
+    return SASNAV_OK;
+}
+
+int sasnav_path_join(char *out, size_t size, const char *dir, const char *name)
+{
+    int k = snprintf(out, size, "%s/%s", dir, name);
+    if (k < 0 || (size_t)k >= size)
+        return sasnav_set_error(SASNAV_ERR_ARG, "path too long: %s/%s", dir, name);
+    return SASNAV_OK;
 }

@@ -1,4 +1,5 @@
-/* Text outputs (configs, CSV tables, reports) written under a temporary name
+/* Text files of the I/O layer. Reading: a whole regular text file into
+ * memory; paths joined with a length check. Writing: text outputs (configs, CSV tables, reports) written under a temporary name
  * "<path>.tmp-XXXXXX" in the target's directory and renamed onto the target
  * only when everything was written: a failure never leaves a half-written
  * file. Private to the library and the CLI. */
@@ -23,5 +24,15 @@ int sasnav_text_commit(sasnav_text_out *out);
 
 /* Closes and removes the temporary file (after a failure of the caller). */
 void sasnav_text_abort(sasnav_text_out *out);
+
+/* Reads the whole regular file `path` (at most max_bytes bytes) into a
+ * NUL-terminated buffer (*text, to free(); *len bytes, may be NULL).
+ * SASNAV_ERR_IO (missing, unreadable, not a regular file), `bad_content`
+ * (the caller's code, e.g. SASNAV_ERR_CONFIG, for a file over max_bytes or
+ * holding a NUL byte) or SASNAV_ERR_NOMEM, with a message naming the file. */
+int sasnav_text_read(const char *path, long max_bytes, int bad_content, char **text, size_t *len);
+
+/* out = dir + "/" + name; SASNAV_ERR_ARG when it does not fit in size. */
+int sasnav_path_join(char *out, size_t size, const char *dir, const char *name);
 
 #endif

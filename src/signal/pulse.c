@@ -13,56 +13,6 @@
 
 #include <math.h>
 
-void sasnav_system_default(sasnav_system *sys)
-{
-    if (!sys) return;
-    sys->sound_speed = 1500.0;
-    sys->f0 = 300e3;
-    sys->bandwidth = 30e3;
-    sys->sample_rate = 60e3;
-    sys->taper = SASNAV_TAPER_NONE;
-    sys->attenuation = SASNAV_ATTEN_EXPLODING;
-    sys->beam_pattern = 1;
-}
-
-static int check_positive(double v, const char *what)
-{
-    if (!isfinite(v) || !(v > 0.0))
-        return sasnav_set_error(SASNAV_ERR_ARG, "system: %s must be finite and > 0, got %g",
-                                what, v);
-    return SASNAV_OK;
-}
-
-int sasnav_system_check(const sasnav_system *sys)
-{
-    if (!sys) return sasnav_set_error(SASNAV_ERR_ARG, "system description is NULL");
-    int rc = check_positive(sys->sound_speed, "sound_speed");
-    if (!rc) rc = check_positive(sys->f0, "f0");
-    if (!rc) rc = check_positive(sys->bandwidth, "bandwidth");
-    if (!rc) rc = check_positive(sys->sample_rate, "sample_rate");
-    if (rc) return rc;
-    if (sys->sample_rate < sys->bandwidth)
-        return sasnav_set_error(SASNAV_ERR_ARG,
-                                "system: sample_rate %g Hz is below the bandwidth %g Hz "
-                                "(complex sampling needs fs >= B)",
-                                sys->sample_rate, sys->bandwidth);
-    if (!(sys->f0 > 0.5 * sys->bandwidth))
-        return sasnav_set_error(SASNAV_ERR_ARG,
-                                "system: f0 %g Hz must exceed half the bandwidth (%g Hz)", sys->f0,
-                                0.5 * sys->bandwidth);
-    if (sys->taper != SASNAV_TAPER_NONE && sys->taper != SASNAV_TAPER_HANN &&
-        sys->taper != SASNAV_TAPER_HAMMING)
-        return sasnav_set_error(SASNAV_ERR_ARG, "system: unknown taper %d", (int)sys->taper);
-    if (sys->attenuation != SASNAV_ATTEN_EXPLODING && sys->attenuation != SASNAV_ATTEN_SPHERICAL &&
-        sys->attenuation != SASNAV_ATTEN_NONE)
-        return sasnav_set_error(SASNAV_ERR_ARG, "system: unknown attenuation model %d",
-                                (int)sys->attenuation);
-    if (sys->beam_pattern != 0 && sys->beam_pattern != 1)
-        return sasnav_set_error(SASNAV_ERR_ARG, "system: beam_pattern must be 0 or 1, got %d",
-                                sys->beam_pattern);
-    return SASNAV_OK;
-}
-
 /* Two-way delay 2 r / c of ranges [range_min, range_max] plus margin samples at
  * both ends: t0 = 2 range_min / c - margin / fs, last sample at or after
  * 2 range_max / c + margin / fs. */

@@ -358,3 +358,28 @@ sasnav_pose sasnav_traj_rigid_fit(const sasnav_pose *a, const sasnav_pose *b, in
     double c = cos(phi), s = sin(phi);
     return (sasnav_pose){bx - (c * ax - s * ay), by - (s * ax + c * ay), phi};
 }
+
+int sasnav_traj_rms_rigid(const sasnav_ping_pose *nav, const sasnav_ping_pose *truth, int n,
+                          double *surge_rms, double *sway_rms)
+{
+    if (!nav || !truth || n < 1 || !surge_rms || !sway_rms)
+        return sasnav_set_error(SASNAV_ERR_ARG, "rms_rigid: NULL argument or n < 1");
+    sasnav_pose *a = malloc(sizeof *a * n), *t = malloc(sizeof *t * n);
+    int rc = a && t ? SASNAV_OK : sasnav_set_error(SASNAV_ERR_NOMEM, "rms_rigid: out of memory");
+    if (!rc) rc = sasnav_traj_centroids(nav, n, a);
+    if (!rc) rc = sasnav_traj_centroids(truth, n, t);
+    if (!rc) {
+        sasnav_pose m = sasnav_traj_rigid_fit(a, t, n);
+        double ex = 0, ey = 0;
+        for (int p = 0; p < n; p++) {
+            sasnav_pose e = sasnav_pose_compose(m, a[p]);
+            ex += (e.x - t[p].x) * (e.x - t[p].x);
+            ey += (e.y - t[p].y) * (e.y - t[p].y);
+        }
+        *surge_rms = sqrt(ex / n);
+        *sway_rms = sqrt(ey / n);
+    }
+    free(a);
+    free(t);
+    return rc;
+}

@@ -111,20 +111,6 @@ static int navigate_phase(const sasnav_run *run, const sasnav_validate_opts *o, 
     return rc;
 }
 
-/* |<a, b>| / (|a| |b|) over the region. */
-static double ncc(const sasnav_cfloat *a, const sasnav_cfloat *b, const unsigned char *region, size_t n)
-{
-    double complex s = 0;
-    double ea = 0, eb = 0;
-    for (size_t j = 0; j < n; j++) {
-        if (!region[j]) continue;
-        s += (double complex)a[j] * conj((double complex)b[j]);
-        ea += crealf(a[j]) * crealf(a[j]) + cimagf(a[j]) * cimagf(a[j]);
-        eb += crealf(b[j]) * crealf(b[j]) + cimagf(b[j]) * cimagf(b[j]);
-    }
-    return ea > 0 && eb > 0 ? cabs(s) / sqrt(ea * eb) : 0.0;
-}
-
 /* Images of the N SISO and s0 SIMO apertures with ping poses `nav`, into
  * out[0 .. N + s0 - 1]. */
 static int image_apertures(const sasnav_run *run, const sasnav_ping_pose *nav, int s0,
@@ -419,7 +405,8 @@ int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sas
         for (int a = 0; a < n_nav_img; a++) {
             out->correlation[a * n_nav_img + a] = 1.0;
             for (int b = a + 1; b < n_nav_img; b++) {
-                double c = ncc(out->images + (size_t)a * npx, out->images + (size_t)b * npx, region, npx);
+                double c = sasnav_image_correlation(out->images + (size_t)a * npx,
+                                                    out->images + (size_t)b * npx, region, npx);
                 out->correlation[a * n_nav_img + b] = out->correlation[b * n_nav_img + a] = c;
                 out->min_correlation = fmin(out->min_correlation, c);
                 int sa = out->image_simo[a], sb = out->image_simo[b];
@@ -433,7 +420,9 @@ int sasnav_validate(const sasnav_run *run, const sasnav_validate_opts *opts, sas
             double *m = set ? &out->min_correlation_truth : &out->min_correlation_nominal;
             for (int a = a0; a < a0 + per; a++)
                 for (int b = a + 1; b < a0 + per; b++)
-                    *m = fmin(*m, ncc(out->images + (size_t)a * npx, out->images + (size_t)b * npx, region, npx));
+                    *m = fmin(*m, sasnav_image_correlation(out->images + (size_t)a * npx,
+                                                          out->images + (size_t)b * npx,
+                                                          region, npx));
         }
     }
     free(poses);

@@ -1,0 +1,95 @@
+/* The acoustic system and the receiver array: defaults and checks (model.h,
+ * geometry.h). In the core because every layer, the run included, checks
+ * what it is given against them. */
+#include "sasnav/model.h"
+#include "sasnav/geometry.h"
+#include "sasnav/error.h"
+
+#include <math.h>
+
+void sasnav_system_default(sasnav_system *sys)
+{
+    if (!sys) return;
+    sys->sound_speed = 1500.0;
+    sys->f0 = 300e3;
+    sys->bandwidth = 30e3;
+    sys->sample_rate = 60e3;
+    sys->taper = SASNAV_TAPER_NONE;
+    sys->attenuation = SASNAV_ATTEN_EXPLODING;
+    sys->beam_pattern = 1;
+}
+
+static int check_positive(double v, const char *what)
+{
+    if (!isfinite(v) || !(v > 0.0))
+        return sasnav_set_error(SASNAV_ERR_ARG, "system: %s must be finite and > 0, got %g",
+                                what, v);
+    return SASNAV_OK;
+}
+
+int sasnav_system_check(const sasnav_system *sys)
+{
+    if (!sys) return sasnav_set_error(SASNAV_ERR_ARG, "system description is NULL");
+    int rc = check_positive(sys->sound_speed, "sound_speed");
+    if (!rc) rc = check_positive(sys->f0, "f0");
+    if (!rc) rc = check_positive(sys->bandwidth, "bandwidth");
+    if (!rc) rc = check_positive(sys->sample_rate, "sample_rate");
+    if (rc) return rc;
+    if (sys->sample_rate < sys->bandwidth)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "system: sample_rate %g Hz is below the bandwidth %g Hz "
+                                "(complex sampling needs fs >= B)",
+                                sys->sample_rate, sys->bandwidth);
+    if (!(sys->f0 > 0.5 * sys->bandwidth))
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "system: f0 %g Hz must exceed half the bandwidth (%g Hz)", sys->f0,
+                                0.5 * sys->bandwidth);
+    if (sys->taper != SASNAV_TAPER_NONE && sys->taper != SASNAV_TAPER_HANN &&
+        sys->taper != SASNAV_TAPER_HAMMING)
+        return sasnav_set_error(SASNAV_ERR_ARG, "system: unknown taper %d", (int)sys->taper);
+    if (sys->attenuation != SASNAV_ATTEN_EXPLODING && sys->attenuation != SASNAV_ATTEN_SPHERICAL &&
+        sys->attenuation != SASNAV_ATTEN_NONE)
+        return sasnav_set_error(SASNAV_ERR_ARG, "system: unknown attenuation model %d",
+                                (int)sys->attenuation);
+    if (sys->beam_pattern != 0 && sys->beam_pattern != 1)
+        return sasnav_set_error(SASNAV_ERR_ARG, "system: beam_pattern must be 0 or 1, got %d",
+                                sys->beam_pattern);
+    return SASNAV_OK;
+}
+
+int sasnav_array_check(const sasnav_array *array)
+{
+    if (!array) return sasnav_set_error(SASNAV_ERR_ARG, "array description is NULL");
+    if (array->n_rx < 1 || array->n_rx > SASNAV_MAX_RX)
+        return sasnav_set_error(SASNAV_ERR_ARG, "array needs 1..%d receivers, got %d",
+                                SASNAV_MAX_RX, array->n_rx);
+    if (!isfinite(array->rx_length) || array->rx_length < 0 || !isfinite(array->tx_length) ||
+        array->tx_length < 0)
+        return sasnav_set_error(SASNAV_ERR_ARG, "element lengths must be finite and >= 0");
+    if (!isfinite(array->rx_height) || !isfinite(array->tx_height))
+        return sasnav_set_error(SASNAV_ERR_ARG, "sensor heights must be finite");
+    for (int l = 0; l < array->n_rx; l++)
+        if (!isfinite(array->rx_u[l]))
+            return sasnav_set_error(SASNAV_ERR_ARG, "receiver %d position is not finite", l);
+    return SASNAV_OK;
+}
+
+int sasnav_array_uniform(sasnav_array *array, int n, double spacing, double length,
+                         double tx_length)
+{
+    if (!array) return sasnav_set_error(SASNAV_ERR_ARG, "array is NULL");
+    if (n < 1 || n > SASNAV_MAX_RX)
+        return sasnav_set_error(SASNAV_ERR_ARG, "array needs 1..%d receivers, got %d",
+                                SASNAV_MAX_RX, n);
+    if (!(spacing > 0) || !isfinite(spacing))
+        return sasnav_set_error(SASNAV_ERR_ARG, "receiver spacing must be > 0, got %g", spacing);
+    sasnav_array a = {0};
+    a.n_rx = n;
+    for (int l = 0; l < n; l++) a.rx_u[l] = (l - 0.5 * (n - 1)) * spacing;
+    a.rx_length = length;
+    a.tx_length = tx_length;
+    int rc = sasnav_array_check(&a);
+    if (rc) return rc;
+    *array = a;
+    return SASNAV_OK;
+}
