@@ -93,10 +93,7 @@ int cmd_simulate(int argc, char **argv)
         long s;
         if (cli_parse_int(seed, 0, 0x7fffffffL, &s))
             return cli_fail("simulate", 0, "--seed needs a non-negative integer");
-        sc.ripples.seed = (uint64_t)s * 3 + 1;
-        sc.traj.seed = (uint64_t)s * 3 + 2;
-        sc.noise_seed = (uint64_t)s * 3 + 3;
-        sc.aiding.seed = (uint64_t)s * 3 + 4;
+        sasnav_scenario_seed(&sc, (uint64_t)s);
     }
     if (aiding) sc.aiding.enabled = 1;
     if (snr) {

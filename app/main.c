@@ -1,5 +1,6 @@
 /* sasnav: synthetic aperture sonar micronavigation and imaging, command line. */
 #include "cli.h"
+#include "sasnav/version.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -53,7 +54,7 @@ int main(int argc, char **argv)
         return 0;
     }
     if (!strcmp(argv[1], "--version")) {
-        puts("sasnav 0.1.0");
+        printf("sasnav %s\n", sasnav_version());
         return 0;
     }
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)

@@ -96,6 +96,11 @@ typedef struct {
  * target in paper-pair geometry). Returns SASNAV_ERR_ARG for unknown names. */
 int sasnav_scenario_preset(const char *name, sasnav_scenario *sc);
 
+/* Seeds every random draw of a scenario from one number S (what
+ * `sasnav simulate --seed S` does): scene 3S + 1, trajectory errors 3S + 2,
+ * noise 3S + 3, aiding errors 3S + 4. */
+void sasnav_scenario_seed(sasnav_scenario *sc, uint64_t seed);
+
 /* Validates a scenario (positive sizes, finite values, sensible ranges). */
 int sasnav_scenario_check(const sasnav_scenario *sc);
 

@@ -140,3 +140,12 @@ int sasnav_scenario_check(const sasnav_scenario *sc)
     }
     return sasnav_grid_check(&sc->image_grid);
 }
+
+void sasnav_scenario_seed(sasnav_scenario *sc, uint64_t seed)
+{
+    if (!sc) return;
+    sc->ripples.seed = seed * 3 + 1;
+    sc->traj.seed = seed * 3 + 2;
+    sc->noise_seed = seed * 3 + 3;
+    sc->aiding.seed = seed * 3 + 4;
+}
