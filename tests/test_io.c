@@ -71,11 +71,16 @@ static void random_pose(sasnav_pose *p)
     p->theta = rng_uniform(-0.3, 0.3);
 }
 
+/* Random pings anywhere in +-100 m, each transmitter within a metre of its
+ * array (the plausibility check refuses more than 100 m apart). */
 static void random_poses(sasnav_ping_pose *poses, int n)
 {
     for (int p = 0; p < n; p++) {
-        random_pose(&poses[p].tx);
         random_pose(&poses[p].array);
+        poses[p].tx = poses[p].array;
+        poses[p].tx.x += rng_uniform(-1, 1);
+        poses[p].tx.y += rng_uniform(-0.5, 0.5);
+        poses[p].tx.theta += rng_uniform(-0.01, 0.01);
     }
 }
 
@@ -727,6 +732,63 @@ static void test_bad_run_files(void)
     sasnav_run_free(ref);
 }
 
+/* Physically impossible values in an otherwise well-formed run file: each
+ * refused with SASNAV_ERR_FORMAT and a message naming the file and the
+ * value (docs/format.md, "Plausibility"). */
+static void test_implausible_runs(void)
+{
+    printf("implausible runs:\n");
+    static const struct {
+        const char *obj, *attr;
+        double value;
+        const char *says;
+    } cases[] = {
+        {"/system", "sound_speed", 15.0, "sound_speed"},      /* nothing carries sound so slowly */
+        {"/system", "sound_speed", 15000.0, "sound_speed"},   /* nor so fast (steel: 5900) */
+        {"/system", "f0", 50.0, "f0"},                        /* below the band's use for imaging */
+        {"/system", "f0", 1e9, "f0"},
+        {"/system", "sample_rate", 1e12, "sample_rate"},
+        {"/system", "speed", 1000.0, "speed"},               /* 2000 kn */
+        {"/system", "ping_spacing", 1e4, "ping_spacing"},
+        {"/system", "range_of_interest", 1e7, "range_of_interest"},
+        {"/system", "t0", 200.0, "window"},                   /* 150 km of travel before sample 0 */
+        {"/array", "rx_height", -1e5, "heights"},
+        {"/array", "rx_length", 500.0, "element lengths"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        char name[64];
+        snprintf(name, sizeof name, "implausible-%zu.h5", k);
+        const char *path = fresh_run_file(name, 0);
+        hid_t f = open_rw(path);
+        set_attr_double(f, cases[k].obj, cases[k].attr, cases[k].value);
+        H5Fclose(f);
+        sasnav_run *run = NULL;
+        CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
+        CHECK(strstr(sasnav_last_error(), name) && strstr(sasnav_last_error(), cases[k].says),
+              "%s %s = %g: the message should name the file and %s: %s", cases[k].obj,
+              cases[k].attr, cases[k].value, cases[k].says, sasnav_last_error());
+        sasnav_run_free(run);
+    }
+    /* a receiver 1 km from the array's centre, a transmitter 200 m from its array */
+    const char *path = fresh_run_file("implausible-rx.h5", 0);
+    hid_t f = open_rw(path);
+    double far = 1000.0;
+    poke(f, "/array/rx_u", H5T_NATIVE_DOUBLE, 1, 1, &far);
+    H5Fclose(f);
+    sasnav_run *run = NULL;
+    CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
+    CHECK(strstr(sasnav_last_error(), "rx_u[1]") != NULL, "message names rx_u[1]: %s",
+          sasnav_last_error());
+    path = fresh_run_file("implausible-tx.h5", 0);
+    f = open_rw(path);
+    double tx_x = 200.0;
+    poke(f, "/nav/tx", H5T_NATIVE_DOUBLE, 3 * 2, 2, &tx_x); /* ping 2, x */
+    H5Fclose(f);
+    CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
+    CHECK(strstr(sasnav_last_error(), "ping 2") && strstr(sasnav_last_error(), "transmitter"),
+          "message names ping 2's transmitter: %s", sasnav_last_error());
+}
+
 static void test_bad_image_files(void)
 {
     sasnav_grid grid, gb;
@@ -981,6 +1043,7 @@ int main(void)
     test_nav_round_trip();
     test_image_round_trip();
     test_bad_run_files();
+    test_implausible_runs();
     test_bad_image_files();
     test_writers_fail_cleanly();
     test_h5py();

@@ -45,6 +45,24 @@ typedef struct {
     int n_samples;
 } sasnav_window;
 
+/* Physically possible ranges (docs/format.md, "Plausibility"): every
+ * system, array and run is checked against them (sasnav_system_check,
+ * sasnav_array_check, sasnav_run_check), so every reader and every command
+ * refuses the same impossible inputs. They are wide on purpose: from air
+ * (AirSAS, c ~ 343 m/s, f0 ~ 20 kHz) to sea water, from tanks to surveys. */
+#define SASNAV_SOUND_SPEED_MIN 200.0   /* m/s: below any gas at survey temperatures */
+#define SASNAV_SOUND_SPEED_MAX 2000.0  /* m/s: above sea water (1450-1550) with margin */
+#define SASNAV_F0_MIN 100.0            /* Hz */
+#define SASNAV_F0_MAX 10e6             /* Hz: above any imaging sonar */
+#define SASNAV_SAMPLE_RATE_MAX 1e9     /* Hz, complex baseband */
+#define SASNAV_SIZE_MAX_M 100.0        /* m: receiver positions, element lengths,
+                                          ping spacing, Tx-array separation */
+#define SASNAV_HEIGHT_MAX_M 10e3       /* m: |sensor height| above the scene plane */
+#define SASNAV_RANGE_MAX_M 100e3       /* m: range of interest, one-way range of
+                                          the window's end */
+#define SASNAV_SPEED_MAX 100.0         /* m/s: nominal platform speed */
+#define SASNAV_POSITION_MAX_M 1e8      /* m: |x|, |y| of any pose (Earth scale) */
+
 /* Fills `sys` with the paper-pair system: c = 1500, f0 = 300 kHz,
  * B = 30 kHz, fs = 2B, no taper, exploding sources, beam patterns on. */
 void sasnav_system_default(sasnav_system *sys);

@@ -146,11 +146,29 @@ int sasnav_aiding_check(const sasnav_aiding *a, int n_pings)
 
 static int pose_finite(sasnav_pose a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.theta); }
 
+static int pose_placed(sasnav_pose a)
+{
+    return fabs(a.x) <= SASNAV_POSITION_MAX_M && fabs(a.y) <= SASNAV_POSITION_MAX_M;
+}
+
+/* Finite poses, within Earth scale, with the transmitter within
+ * SASNAV_SIZE_MAX_M of the array in each ping. */
 static int poses_check(const sasnav_ping_pose *poses, int n, const char *what)
 {
-    for (int p = 0; p < n; p++)
+    for (int p = 0; p < n; p++) {
         if (!pose_finite(poses[p].tx) || !pose_finite(poses[p].array))
             return sasnav_set_error(SASNAV_ERR_ARG, "%s of ping %d is not finite", what, p);
+        if (!pose_placed(poses[p].tx) || !pose_placed(poses[p].array))
+            return sasnav_set_error(SASNAV_ERR_ARG,
+                                    "%s of ping %d: position (%g, %g) m is beyond +-%g m", what,
+                                    p, poses[p].array.x, poses[p].array.y, SASNAV_POSITION_MAX_M);
+        double sep = hypot(poses[p].tx.x - poses[p].array.x, poses[p].tx.y - poses[p].array.y);
+        if (sep > SASNAV_SIZE_MAX_M)
+            return sasnav_set_error(SASNAV_ERR_ARG,
+                                    "%s of ping %d: transmitter %g m from the array (plausible: "
+                                    "at most %g m)",
+                                    what, p, sep, SASNAV_SIZE_MAX_M);
+    }
     return SASNAV_OK;
 }
 
@@ -170,11 +188,25 @@ int sasnav_run_check(const sasnav_run *run)
     if (!run->raw || !run->nav) return sasnav_set_error(SASNAV_ERR_ARG, "run data or navigation is NULL");
     if (!isfinite(run->ping_spacing) || !isfinite(run->tx_lag))
         return sasnav_set_error(SASNAV_ERR_ARG, "ping spacing and Tx lag must be finite");
-    if (!isfinite(run->speed) || run->speed < 0)
-        return sasnav_set_error(SASNAV_ERR_ARG, "speed must be finite and >= 0, got %g", run->speed);
-    if (!isfinite(run->range_of_interest) || run->range_of_interest < 0)
-        return sasnav_set_error(SASNAV_ERR_ARG, "range of interest must be finite and >= 0, got %g",
-                                run->range_of_interest);
+    if (fabs(run->ping_spacing) > SASNAV_SIZE_MAX_M || fabs(run->tx_lag) > SASNAV_SIZE_MAX_M)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "ping_spacing %g m, tx_lag %g m: beyond the plausible +-%g m",
+                                run->ping_spacing, run->tx_lag, SASNAV_SIZE_MAX_M);
+    if (!isfinite(run->speed) || run->speed < 0 || run->speed > SASNAV_SPEED_MAX)
+        return sasnav_set_error(SASNAV_ERR_ARG, "speed %g m/s is outside the plausible 0..%g m/s",
+                                run->speed, SASNAV_SPEED_MAX);
+    if (!isfinite(run->range_of_interest) || run->range_of_interest < 0 ||
+        run->range_of_interest > SASNAV_RANGE_MAX_M)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "range_of_interest %g m is outside the plausible 0..%g m",
+                                run->range_of_interest, SASNAV_RANGE_MAX_M);
+    double t_end = run->win.t0 + run->win.n_samples / run->sys.sample_rate;
+    if (!(t_end > 0) || 0.5 * run->sys.sound_speed * t_end > SASNAV_RANGE_MAX_M)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "sample window t0 %g s + %d samples at %g Hz ends at range %g m "
+                                "(plausible: 0..%g m)",
+                                run->win.t0, run->win.n_samples, run->sys.sample_rate,
+                                0.5 * run->sys.sound_speed * t_end, SASNAV_RANGE_MAX_M);
     rc = poses_check(run->nav, run->n_pings, "navigation");
     if (rc) return rc;
     if (run->truth) {

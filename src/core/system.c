@@ -35,6 +35,19 @@ int sasnav_system_check(const sasnav_system *sys)
     if (!rc) rc = check_positive(sys->bandwidth, "bandwidth");
     if (!rc) rc = check_positive(sys->sample_rate, "sample_rate");
     if (rc) return rc;
+    if (sys->sound_speed < SASNAV_SOUND_SPEED_MIN || sys->sound_speed > SASNAV_SOUND_SPEED_MAX)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "system: sound_speed %g m/s is outside the physically possible "
+                                "%g..%g m/s",
+                                sys->sound_speed, SASNAV_SOUND_SPEED_MIN, SASNAV_SOUND_SPEED_MAX);
+    if (sys->f0 < SASNAV_F0_MIN || sys->f0 > SASNAV_F0_MAX)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "system: f0 %g Hz is outside the plausible %g..%g Hz", sys->f0,
+                                SASNAV_F0_MIN, SASNAV_F0_MAX);
+    if (sys->sample_rate > SASNAV_SAMPLE_RATE_MAX)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "system: sample_rate %g Hz is above the plausible %g Hz",
+                                sys->sample_rate, SASNAV_SAMPLE_RATE_MAX);
     if (sys->sample_rate < sys->bandwidth)
         return sasnav_set_error(SASNAV_ERR_ARG,
                                 "system: sample_rate %g Hz is below the bandwidth %g Hz "
@@ -66,11 +79,26 @@ int sasnav_array_check(const sasnav_array *array)
     if (!isfinite(array->rx_length) || array->rx_length < 0 || !isfinite(array->tx_length) ||
         array->tx_length < 0)
         return sasnav_set_error(SASNAV_ERR_ARG, "element lengths must be finite and >= 0");
+    if (array->rx_length > SASNAV_SIZE_MAX_M || array->tx_length > SASNAV_SIZE_MAX_M)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "array: element lengths rx_length %g m, tx_length %g m: above the "
+                                "plausible %g m",
+                                array->rx_length, array->tx_length, SASNAV_SIZE_MAX_M);
     if (!isfinite(array->rx_height) || !isfinite(array->tx_height))
         return sasnav_set_error(SASNAV_ERR_ARG, "sensor heights must be finite");
-    for (int l = 0; l < array->n_rx; l++)
+    if (fabs(array->rx_height) > SASNAV_HEIGHT_MAX_M || fabs(array->tx_height) > SASNAV_HEIGHT_MAX_M)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "array: heights rx_height %g m, tx_height %g m: beyond the "
+                                "plausible +-%g m",
+                                array->rx_height, array->tx_height, SASNAV_HEIGHT_MAX_M);
+    for (int l = 0; l < array->n_rx; l++) {
         if (!isfinite(array->rx_u[l]))
             return sasnav_set_error(SASNAV_ERR_ARG, "receiver %d position is not finite", l);
+        if (fabs(array->rx_u[l]) > SASNAV_SIZE_MAX_M)
+            return sasnav_set_error(SASNAV_ERR_ARG,
+                                    "array: rx_u[%d] = %g m is beyond the plausible +-%g m", l,
+                                    array->rx_u[l], SASNAV_SIZE_MAX_M);
+    }
     return SASNAV_OK;
 }
 
