@@ -21,6 +21,10 @@ int cli_parse_int(const char *text, long lo, long hi, long *out);
 /* Parses X0,X1,NX,Y0,Y1,NY into a grid. */
 int cli_parse_grid(const char *text, sasnav_grid *grid);
 
+/* SIGINT / SIGTERM / SIGHUP remove partial outputs, then end the process;
+ * SIGXFSZ is ignored (app/signals.c). */
+void cli_install_signal_handlers(void);
+
 int cmd_simulate(int argc, char **argv);
 int cmd_image(int argc, char **argv);
 int cmd_pair(int argc, char **argv);

@@ -45,6 +45,7 @@ static const command commands[] = {
 
 int main(int argc, char **argv)
 {
+    cli_install_signal_handlers();
     if (argc < 2) {
         fputs(usage, stderr);
         return 2;

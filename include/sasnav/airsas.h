@@ -14,8 +14,10 @@
  * of the mean room response, pulse compression and demodulation (ingest.h),
  * and the circular geometry, giving a sasnav_run in the raw-data layout.
  *
- * Thread safety: the functions share no state; distinct objects may be used
- * from different threads.
+ * Threads: the functions share no state and use no OpenMP; distinct objects
+ * may be used from different threads. sasnav_airsas_to_run makes an ingest
+ * plan (FFTW planning under the lock of op.h); sasnav_airsas_read only reads
+ * text files.
  */
 #ifndef SASNAV_AIRSAS_H
 #define SASNAV_AIRSAS_H

@@ -1,7 +1,10 @@
 /* sasnav -- scenario configuration files (YAML through libfyaml).
  * A config file starts from a preset (key `preset`, default paper-trajectory)
  * and overrides any field; comments are allowed. Keys are documented in
- * docs/config.md and the examples/ folder. */
+ * docs/config.md and the examples/ folder.
+ *
+ * Threads: no state in sasnav (one libfyaml document per call, no OpenMP):
+ * distinct calls on distinct files may run concurrently. */
 #ifndef SASNAV_CONFIG_H
 #define SASNAV_CONFIG_H
 

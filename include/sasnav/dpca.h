@@ -37,11 +37,11 @@
  * within about lambda / 4 of what the envelope can resolve, and the yaw small
  * enough that the beams of the two pings still illuminate the same patch.
  *
- * Thread safety: re-entrant; distinct calls may run concurrently. FFTW plans
- * are made and destroyed inside the OpenMP critical section
- * `sasnav_fftw_planner` (see op.h). Internally the channel pairs are
- * processed by opts.nthreads OpenMP threads; the result does not depend on
- * the thread count.
+ * Threads: re-entrant, no shared state; calls on the same (read-only) run
+ * may run concurrently. Each estimate plans and destroys its FFTW plans
+ * under the planner lock of op.h. The channel pairs are processed by
+ * opts.nthreads OpenMP threads (0 = omp_get_max_threads() at the call, at
+ * most one per channel pair); the result does not depend on the count.
  */
 #ifndef SASNAV_DPCA_H
 #define SASNAV_DPCA_H

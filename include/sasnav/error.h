@@ -4,6 +4,12 @@
  * success, one of the negative codes below otherwise. The codes are never
  * renumbered. A human-readable message describing the most recent failure in
  * the calling thread is available from sasnav_last_error().
+ *
+ * Threads: the message is thread-local (_Thread_local in src/core/error.c),
+ * so every function here is safe from any thread and sees only that
+ * thread's failures. A failure on an OpenMP worker inside a library call
+ * reaches the caller as the return code; its message only where the call
+ * copies it back to the calling thread (sasnav_navigate does).
  */
 #ifndef SASNAV_ERROR_H
 #define SASNAV_ERROR_H

@@ -20,9 +20,13 @@
  * Newton step at the final iterations (k, i) on the quadratic model of eta
  * measured from ten residual vectors.
  *
- * Thread safety: one estimator object per thread (sasnav_navigate runs one
- * per thread over pairs). Internally the operators use opts.nthreads
- * OpenMP threads; the results do not depend on that number.
+ * Threads: distinct estimator objects may be used concurrently, one object
+ * by one thread at a time (sasnav_navigate runs one per thread over pairs);
+ * the sasnav_system / array / window and data passed in may be shared
+ * read-only. Its operators use opts.nthreads OpenMP threads (0 =
+ * omp_get_max_threads() at create); results do not depend on that number.
+ * create, set_data (it rebuilds the operators) and destroy plan FFTW under
+ * the planner lock of op.h.
  */
 #ifndef SASNAV_ESTIMATOR_H
 #define SASNAV_ESTIMATOR_H

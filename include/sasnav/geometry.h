@@ -3,7 +3,10 @@
  * Conventions (SPEC 1): x along-track, y range (towards the scene), theta yaw
  * counter-clockwise from +x. At theta = 0 the array axis is +x and every
  * element looks along +y. Metres and radians.
- * All functions here are pure and thread-safe.
+ *
+ * Threads: every function here is pure (no state, no OpenMP, no FFTW):
+ * safe to call concurrently from any threads; inputs may be shared
+ * read-only.
  */
 #ifndef SASNAV_GEOMETRY_H
 #define SASNAV_GEOMETRY_H

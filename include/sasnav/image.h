@@ -1,4 +1,10 @@
-/* sasnav -- image grids, backprojection of runs and CGLS inversion of pings. */
+/* sasnav -- image grids, backprojection of runs and CGLS inversion of pings.
+ *
+ * Threads: the grid functions and sasnav_image_correlation are pure.
+ * sasnav_backproject is re-entrant (the run is only read): it makes its own
+ * operator with opts (OpenMP with opts->nthreads, FFTW planning: op.h).
+ * sasnav_cgls uses the caller's operator, which must not be in use by
+ * another thread; its own loops are serial. */
 #ifndef SASNAV_IMAGE_H
 #define SASNAV_IMAGE_H
 

@@ -44,8 +44,9 @@
  * bias); with a flat spectrum to 2e-2, the two periodic sinc pulses'
  * band edges falling on different discrete frequencies.
  *
- * Thread safety: distinct plans may run concurrently; one plan owns work
- * buffers and must not be executed by two threads at once.
+ * Threads: distinct plans may run concurrently; one plan owns work buffers
+ * and must be executed by one thread at a time. No OpenMP. create and
+ * destroy plan FFTW under the planner lock of op.h.
  * No file I/O: readers (src/io/airsas.c, the CLI) hand samples to it.
  */
 #ifndef SASNAV_INGEST_H

@@ -9,8 +9,13 @@
  * truncated, wrong shape, missing dataset) with a message naming the problem.
  * HDF5's own error printing is silenced (and restored on return).
  *
- * Thread safety: none of these functions may run concurrently with each
- * other or with other HDF5 use in the process (serial HDF5 build).
+ * Threads: treat as not thread-safe: call these from one thread at a time,
+ * never alongside other HDF5 use in the process. Each call swaps the
+ * default HDF5 error handler (H5Eset_auto2, src/io/h5_util.c h5_begin /
+ * h5_end). Only a thread-safe HDF5 build (H5_HAVE_THREADSAFE; Debian 12's
+ * libhdf5 1.10.8 is one) serialises HDF5 calls itself; sasnav neither checks
+ * for one nor is tested that way. sasnav_remove_partial_outputs is
+ * async-signal-safe and may run from any thread (atomic slots).
  */
 #ifndef SASNAV_IO_H
 #define SASNAV_IO_H
@@ -40,6 +45,14 @@ int sasnav_nav_read(const char *path, int *n_pings, sasnav_ping_pose **nav,
 int sasnav_image_write(const char *path, const sasnav_grid *grid, const sasnav_cfloat *image);
 /* Allocates *image (nx * ny values); free with free(). */
 int sasnav_image_read(const char *path, sasnav_grid *grid, sasnav_cfloat **image);
+
+/* Every file the I/O layer writes (HDF5, text, WAV) goes to a temporary
+ * name next to its target ("<target>.tmp-XXXXXX") that is renamed onto the
+ * target only when complete: a failure never leaves a half-written file and
+ * keeps the previous one. This removes the temporary files of the writes in
+ * progress; it is async-signal-safe, for a SIGINT / SIGTERM handler that
+ * then ends the process (the sasnav tool installs one). */
+void sasnav_remove_partial_outputs(void);
 
 #ifdef __cplusplus
 }

@@ -1,4 +1,8 @@
-/* sasnav -- the acoustic system and the sampled observation window (SPEC 2). */
+/* sasnav -- the acoustic system and the sampled observation window (SPEC 2).
+ *
+ * Threads: every function here is pure (no state, no OpenMP, no FFTW):
+ * safe to call concurrently from any threads; a sasnav_system or
+ * sasnav_window may be shared read-only. */
 #ifndef SASNAV_MODEL_H
 #define SASNAV_MODEL_H
 

@@ -48,15 +48,13 @@
  * The library never prints: progress is reported through the optional
  * callback in the options.
  *
- * Thread safety: re-entrant for distinct runs and outputs. With more than
- * one thread (opts.nthreads, or OpenMP's default) the independent pairs are
- * estimated concurrently, one estimator object per thread (reused through
- * sasnav_pair_set_data) whose operators run on one thread; with one thread
- * the pairs go one after the other. The results are the same bits whatever
- * the thread count (each pair depends on its own data only, and the
- * operators sum in a fixed order). The progress callback may then be called
- * from any of those threads, never from two at once, with `done` counting
- * finished pairs in the order they finish.
+ * Threads: re-entrant for distinct outputs; the run is only read. OpenMP
+ * with opts.nthreads threads (0 = omp_get_max_threads() at the call; at most
+ * 2 n_pings, one below 3 pings). With several, the pairs are estimated
+ * concurrently, one estimator per thread with single-threaded operators;
+ * with one, the operators use it. Same bits whatever the count. The progress
+ * callback may run on any of those threads, never two at once (`done`
+ * counts pairs in the order they finish). FFTW planning: op.h.
  */
 #ifndef SASNAV_NAVIGATE_H
 #define SASNAV_NAVIGATE_H

@@ -34,15 +34,23 @@
  * ~3e-7. G and the kernel taps are stored in float; delays and phases are
  * computed in double.
  *
- * Thread safety: distinct operators may be used concurrently from different
- * threads. One operator must not be used by two threads at once (it owns
- * work buffers). Internally set_geometry, forward and adjoint use OpenMP with
- * opts.nthreads threads (0: omp_get_max_threads() at create); their results
- * do not depend on the thread count (every output is summed by one thread in
- * a fixed order). FFTW plans are made and destroyed only in create/destroy,
- * inside the named OpenMP critical section `sasnav_fftw_planner` (the FFTW
- * planner is not re-entrant; other code that plans FFTW transforms while
- * operators may be created concurrently must use the same section).
+ * Threads: distinct operators may be used concurrently from different
+ * threads; one operator (it owns work buffers) by one thread at a time.
+ * set_geometry, forward and adjoint use OpenMP with opts.nthreads threads,
+ * 0 = omp_get_max_threads() of the creating thread at create (OMP_NUM_THREADS
+ * or omp_set_num_threads); results do not depend on the count (fixed-order
+ * sums). Called inside an OpenMP parallel region, the inner regions get one
+ * thread unless nesting is enabled. FFTW plans are made and destroyed only in
+ * create/destroy, see "FFTW" below.
+ *
+ * FFTW: the planner is not thread-safe. sasnav plans and destroys plans
+ * (operators, estimators, ingest plans, each sasnav_dpca_estimate) only
+ * inside `#pragma omp critical(sasnav_fftw_planner)`, serialising its own
+ * planning across threads. In the shared library that lock is private
+ * (cmake/sasnav.map exports sasnav_* only): an application's section of the
+ * same name is another lock. So an application that plans FFTW while sasnav
+ * may must call fftwf_make_planner_thread_safe() (FFTW >= 3.3.5) first, or
+ * not plan concurrently with those sasnav calls.
  *
  * Memory: about (4 + 4 * ceil4(w) + 8) bytes per (point, channel) pair, e.g.
  * 44 bytes for w = 7 (the default tolerance 1e-6).

@@ -1,6 +1,9 @@
 /* sasnav -- pictures (PNG through PLplot's cairo driver).
- * Writers go to a temporary name and rename on success. Not thread-safe
- * (PLplot keeps global state): call from one thread at a time. */
+ * Writers go to a temporary name and rename on success.
+ *
+ * Threads: not thread-safe. PLplot keeps process-wide state and every call
+ * switches its current stream (plmkstrm / plsstrm in src/plot/plot.c): call
+ * these from one thread at a time, and not while other code uses PLplot. */
 #ifndef SASNAV_PLOT_H
 #define SASNAV_PLOT_H
 

@@ -57,8 +57,11 @@
  * default tolerance 1e-3), e.g. 160 MB for 32 pings of 8 channels on
  * 22,000 pixels.
  *
- * Thread safety: re-entrant for distinct outputs; OpenMP inside. The
- * library never prints. */
+ * Threads: re-entrant for distinct outputs (nav_out may equal nav_in); the
+ * run is only read. OpenMP over pings and trial poses with opts.nthreads
+ * threads (0 = omp_get_max_threads() at the call), each operator on one
+ * thread; it makes one operator per ping plus one per thread (FFTW planning
+ * under the lock of op.h). The library never prints. */
 #ifndef SASNAV_REFINE_H
 #define SASNAV_REFINE_H
 #include "sasnav/image.h"

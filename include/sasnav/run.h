@@ -1,4 +1,9 @@
-/* sasnav -- a run: the raw data of a sequence of pings and their navigation. */
+/* sasnav -- a run: the raw data of a sequence of pings and their navigation.
+ *
+ * Threads: no shared state and no OpenMP. A run may be read by any number
+ * of threads at once (every library function takes it as const, e.g.
+ * several sasnav_navigate / sasnav_backproject calls on one run); allocating,
+ * filling or freeing one needs the caller's exclusive access. */
 #ifndef SASNAV_RUN_H
 #define SASNAV_RUN_H
 

@@ -8,10 +8,12 @@
  * `sasnav::core` the core alone. Headers of the I/O layer: io.h, config.h,
  * plot.h, and the readers and writers in tank.h and airsas.h.
  *
- * Threads: each header states its contract. In short: the library keeps no
- * global state but the per-thread error message; distinct objects may be
- * used from distinct threads; OpenMP parallelism inside calls follows each
- * function's documented thread count. */
+ * Threads: each header states its contract. In short: the core keeps no
+ * global state but the per-thread error message and FFTW's planner (sasnav's
+ * planning is serialised, op.h "FFTW"); distinct objects may be used from
+ * distinct threads, runs shared read-only; OpenMP inside calls follows each
+ * options' nthreads (0 = omp_get_max_threads()). The I/O layer is not
+ * thread-safe (HDF5: io.h, PLplot: plot.h). */
 #ifndef SASNAV_SASNAV_H
 #define SASNAV_SASNAV_H
 

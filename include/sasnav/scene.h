@@ -1,6 +1,10 @@
 /* sasnav -- scenes: lists of point scatterers used to simulate raw data.
  * Simulated scatterers are placed off the reconstruction grid (no inverse
- * crime). Every random draw takes a seed. */
+ * crime). Every random draw takes a seed.
+ *
+ * Threads: no shared state, no OpenMP. The random generator's state lives in
+ * the caller's sasnav_rng: one generator per thread. Distinct calls may run
+ * concurrently; scenes may be shared read-only. */
 #ifndef SASNAV_SCENE_H
 #define SASNAV_SCENE_H
 

@@ -1,4 +1,10 @@
-/* sasnav -- scenarios, trajectories and the raw-data simulator. */
+/* sasnav -- scenarios, trajectories and the raw-data simulator.
+ *
+ * Threads: no shared state (every random draw comes from the scenario's
+ * seeds): distinct calls may run concurrently, scenarios and scenes shared
+ * read-only. sasnav_simulate and sasnav_simulate_raw make an operator with
+ * opts (OpenMP with opts->nthreads, 0 = omp_get_max_threads(); FFTW
+ * planning: op.h); the rest is serial. */
 #ifndef SASNAV_SIM_H
 #define SASNAV_SIM_H
 

@@ -27,6 +27,11 @@
  * empty, finite, not clipped), runs the ingest chain (include/sasnav/ingest.h)
  * per ping and returns a run with the nominal navigation of positions.csv and,
  * when truth.csv exists, the truth.
+ *
+ * Threads: no shared state, no OpenMP: distinct calls (distinct directories)
+ * may run concurrently. sasnav_tank_read_dir makes an ingest plan (FFTW
+ * planning under the lock of op.h); WAV files go through libsndfile, one
+ * handle per file.
  */
 #ifndef SASNAV_TANK_H
 #define SASNAV_TANK_H

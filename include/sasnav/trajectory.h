@@ -15,7 +15,9 @@
  *     track angle (sasnav_traj_align, as in paper Sec. V-D);
  *   - measures cumulative and differential errors against a true trajectory
  *     (sasnav_traj_errors).
- * All functions are pure (no global state) and thread-safe.
+ *
+ * Threads: all functions are pure (no global state, no OpenMP, no FFTW):
+ * safe to call concurrently; inputs may be shared read-only.
  */
 #ifndef SASNAV_TRAJECTORY_H
 #define SASNAV_TRAJECTORY_H

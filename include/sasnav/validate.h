@@ -31,7 +31,13 @@
  * surge step (the tank's jump) and of the array's yaw relative to the track.
  *
  * The library never prints; progress goes through opts.nav.progress
- * (called for every pair of every phase). */
+ * (called for every pair of every phase).
+ *
+ * Threads: re-entrant for distinct outputs; the run is only read. OpenMP
+ * through its parts: navigation with opts.nav.nthreads (navigate.h),
+ * refinement with opts.refine_opts.nthreads (0: opts.nav.nthreads), the
+ * images with opts.op.nthreads (op.h); 0 everywhere = omp_get_max_threads().
+ * The progress callback follows navigate.h's rules. */
 #ifndef SASNAV_VALIDATE_H
 #define SASNAV_VALIDATE_H
 

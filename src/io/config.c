@@ -799,6 +799,30 @@ static void diag_discard(struct fy_diag *diag, void *user, const char *buf, size
     (void)diag, (void)user, (void)buf, (void)len;
 }
 
+/* Offset of the first byte that is not valid UTF-8 (overlong forms,
+ * surrogates and code points past U+10FFFF included), or len when all is.
+ * Checked before libfyaml sees the text: libfyaml 0.8 loops forever on some
+ * invalid UTF-8 (e.g. the two bytes "%\xf3": fuzz_config, docs/fuzzing.md). */
+static size_t utf8_invalid_at(const unsigned char *s, size_t len)
+{
+    size_t i = 0;
+    while (i < len) {
+        unsigned c = s[i];
+        size_t n = c < 0x80 ? 0 : (c & 0xE0) == 0xC0 ? 1 : (c & 0xF0) == 0xE0 ? 2 : (c & 0xF8) == 0xF0 ? 3 : 9;
+        if (n == 9 || c == 0xC0 || c == 0xC1 || c > 0xF4 || n >= len - i) return i;
+        unsigned long cp = n == 0 ? c : n == 1 ? (c & 0x1F) : n == 2 ? (c & 0x0F) : (c & 0x07);
+        for (size_t k = 1; k <= n; k++) {
+            if ((s[i + k] & 0xC0) != 0x80) return i;
+            cp = cp << 6 | (s[i + k] & 0x3F);
+        }
+        if ((n == 2 && cp < 0x800) || (n == 3 && (cp < 0x10000 || cp > 0x10FFFF)) ||
+            (cp >= 0xD800 && cp <= 0xDFFF))
+            return i;
+        i += n + 1;
+    }
+    return len;
+}
+
 /* Parses text into a document; NULL document with SASNAV_OK means an empty
  * stream (no keys). */
 static int parse_yaml(const char *path, const char *text, size_t len, struct fy_document **doc)
@@ -899,6 +923,11 @@ int sasnav_config_load(const char *path, sasnav_scenario *sc)
     size_t len = 0;
     int rc = sasnav_text_read(path, CONFIG_MAX_BYTES, SASNAV_ERR_CONFIG, &text, &len);
     if (rc) return rc;
+    size_t bad = utf8_invalid_at((const unsigned char *)text, len);
+    if (bad < len) {
+        free(text);
+        return sasnav_set_error(SASNAV_ERR_CONFIG, "%s: not UTF-8 text (byte %zu)", path, bad);
+    }
 
     loader *L = calloc(1, sizeof *L);
     if (!L) {

@@ -1,11 +1,13 @@
 /* Private HDF5 helpers: checked attribute/dataset access, error messages
  * naming the file and the object, and atomic writes (temporary + rename). */
 #include "io/h5_util.h"
+#include "io/textfile.h"
 
 #include "sasnav/error.h"
 #include "sasnav/model.h"
 
 #include <errno.h>
+#include <pthread.h>
 #include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
@@ -47,10 +49,21 @@ static void close_id(hid_t *id, herr_t (*closer)(hid_t))
 
 /* --- errors ------------------------------------------------------------- */
 
+/* HDF5 1.10.8 crashes in its exit handler (H5F__close_cb from
+ * H5_term_library) after an H5Fclose that failed, e.g. on a full disk or a
+ * file-size limit. Every file sasnav opens it also closes, so the handler
+ * has nothing to do for us: it is switched off before the first HDF5 call
+ * (H5dont_atexit fails harmlessly when another user of the library in the
+ * process called HDF5 first). */
+static pthread_once_t atexit_once = PTHREAD_ONCE_INIT;
+static void no_atexit(void) { (void)H5dont_atexit(); }
+
 void h5_begin(h5_ctx *c, const char *path)
 {
+    pthread_once(&atexit_once, no_atexit);
     c->path = path ? path : "(null)";
     c->tmp_path = NULL;
+    c->partial = -1;
     c->file = H5I_INVALID_HID;
     c->saved_func = NULL;
     c->saved_data = NULL;
@@ -66,6 +79,8 @@ void h5_end(h5_ctx *c)
         free(c->tmp_path);
         c->tmp_path = NULL;
     }
+    sasnav_partial_remove(c->partial);
+    c->partial = -1;
     H5Eclear2(H5E_DEFAULT);
     H5Eset_auto2(H5E_DEFAULT, c->saved_func, c->saved_data);
 }
@@ -98,7 +113,23 @@ static herr_t detail_walk(unsigned n, const H5E_error2_t *err, void *data)
 {
     h5_detail *d = data;
     if (err->min_num == H5E_CANTLOCKFILE) d->locked = 1;
-    if (n == 0 && err->desc) snprintf(d->desc, sizeof d->desc, "%s", err->desc);
+    if (n == 0 && err->desc) {
+        /* a system error's description is a multi-line record ("file write
+         * failed: time = ..., errno = 27, error message = 'File too large',
+         * ..."): keep the system's message alone */
+        const char *m = strstr(err->desc, "error message = '");
+        if (m) {
+            m += strlen("error message = '");
+            size_t len = strcspn(m, "'");
+            if (len >= sizeof d->desc) len = sizeof d->desc - 1;
+            memcpy(d->desc, m, len);
+            d->desc[len] = '\0';
+        } else {
+            snprintf(d->desc, sizeof d->desc, "%s", err->desc);
+        }
+        for (char *q = d->desc; *q; q++)
+            if (*q == '\n' || *q == '\r') *q = ' ';
+    }
     return 0;
 }
 
@@ -531,6 +562,7 @@ static int tmp_create(h5_ctx *c)
         if (fd >= 0) {
             close(fd);
             c->tmp_path = tmp;
+            c->partial = sasnav_partial_add(tmp);
             return SASNAV_OK;
         }
         if (errno != EEXIST) {
@@ -576,6 +608,8 @@ int h5_commit(h5_ctx *c)
         return h5_fail(c, SASNAV_ERR_IO, "cannot rename %s onto it: %s", c->tmp_path, strerror(errno));
     free(c->tmp_path);
     c->tmp_path = NULL;
+    sasnav_partial_remove(c->partial);
+    c->partial = -1;
     return SASNAV_OK;
 }
 

@@ -18,6 +18,7 @@
 typedef struct {
     const char *path;   /* the file as named by the caller (messages) */
     char *tmp_path;     /* writers: the temporary file, NULL once renamed */
+    int partial;        /* its slot among the outputs in progress */
     hid_t file;         /* open file or H5I_INVALID_HID */
     H5E_auto2_t saved_func; /* HDF5 automatic error printing, restored at the end */
     void *saved_data;

@@ -39,44 +39,34 @@ static int write_wav(const char *path, const float *data, int n_ch, int n_frames
         free(frames);
         return sasnav_set_error(SASNAV_ERR_IO, "cannot create %s: %s", tmp, sf_strerror(NULL));
     }
+    int slot = sasnav_partial_add(tmp);
     sf_count_t w = sf_writef_float(f, frames, n_frames);
     free(frames);
     int close_rc = sf_close(f);
+    int rc = SASNAV_OK;
     if (w != n_frames || close_rc != 0) {
         unlink(tmp);
-        return sasnav_set_error(SASNAV_ERR_IO, "cannot write %s (%lld of %d frames)", tmp,
-                                (long long)w, n_frames);
-    }
-    if (rename(tmp, path)) {
+        rc = sasnav_set_error(SASNAV_ERR_IO, "cannot write %s (%lld of %d frames)", tmp,
+                              (long long)w, n_frames);
+    } else if (rename(tmp, path)) {
         int e = errno;
         unlink(tmp);
-        return sasnav_set_error(SASNAV_ERR_IO, "cannot rename %s to %s: %s", tmp, path, strerror(e));
+        rc = sasnav_set_error(SASNAV_ERR_IO, "cannot rename %s to %s: %s", tmp, path, strerror(e));
     }
-    return SASNAV_OK;
+    sasnav_partial_remove(slot);
+    return rc;
 }
 
 static int write_poses_csv(const char *path, const sasnav_ping_pose *poses, int n)
 {
-    char tmp[4200];
-    int k = snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid());
-    if (k < 0 || (size_t)k >= sizeof tmp) return sasnav_set_error(SASNAV_ERR_ARG, "path too long: %s", path);
-    FILE *f = fopen(tmp, "w");
-    if (!f) return sasnav_set_error(SASNAV_ERR_IO, "cannot create %s: %s", tmp, strerror(errno));
-    fprintf(f, "ping,x,y,yaw\n");
+    sasnav_text_out out;
+    int rc = sasnav_text_open(&out, path);
+    if (rc) return rc;
+    fprintf(out.f, "ping,x,y,yaw\n");
     for (int i = 0; i < n; i++)
-        fprintf(f, "%d,%.9f,%.9f,%.9e\n", i, poses[i].array.x, poses[i].array.y,
+        fprintf(out.f, "%d,%.9f,%.9f,%.9e\n", i, poses[i].array.x, poses[i].array.y,
                 poses[i].array.theta);
-    int bad = ferror(f);
-    if (fclose(f) || bad) {
-        unlink(tmp);
-        return sasnav_set_error(SASNAV_ERR_IO, "cannot write %s", tmp);
-    }
-    if (rename(tmp, path)) {
-        int e = errno;
-        unlink(tmp);
-        return sasnav_set_error(SASNAV_ERR_IO, "cannot rename %s to %s: %s", tmp, path, strerror(e));
-    }
-    return SASNAV_OK;
+    return sasnav_text_commit(&out);
 }
 
 int sasnav_tank_write_dir(const sasnav_tank_params *p, const char *dir)

@@ -14,6 +14,7 @@ int sasnav_text_open(sasnav_text_out *out, const char *path)
 {
     out->f = NULL;
     out->tmp[0] = '\0';
+    out->partial = -1;
     if (!path || !*path) return sasnav_set_error(SASNAV_ERR_ARG, "empty output path");
     int len = snprintf(out->tmp, sizeof out->tmp, "%s.tmp-XXXXXX", path);
     if (len < 0 || (size_t)len >= sizeof out->tmp || strlen(path) >= sizeof out->path)
@@ -25,6 +26,7 @@ int sasnav_text_open(sasnav_text_out *out, const char *path)
         out->tmp[0] = '\0';
         return sasnav_set_error(SASNAV_ERR_IO, "%s: cannot create: %s", path, strerror(e));
     }
+    out->partial = sasnav_partial_add(out->tmp);
     (void)fchmod(fd, 0644);
     out->f = fdopen(fd, "w");
     if (!out->f) {
@@ -45,14 +47,17 @@ int sasnav_text_commit(sasnav_text_out *out)
     out->f = NULL;
     if (bad) {
         unlink(out->tmp);
+        sasnav_partial_remove(out->partial);
         return sasnav_set_error(SASNAV_ERR_IO, "%s: write error", out->path);
     }
     if (rename(out->tmp, out->path) != 0) {
         int e = errno;
         unlink(out->tmp);
+        sasnav_partial_remove(out->partial);
         return sasnav_set_error(SASNAV_ERR_IO, "%s: cannot rename into place: %s", out->path,
                                 strerror(e));
     }
+    sasnav_partial_remove(out->partial);
     return 0;
 }
 
@@ -61,6 +66,7 @@ void sasnav_text_abort(sasnav_text_out *out)
     if (out->f) fclose(out->f);
     out->f = NULL;
     if (out->tmp[0]) unlink(out->tmp);
+    sasnav_partial_remove(out->partial);
 }
 
 int sasnav_text_read(const char *path, long max_bytes, int bad_content, char **text, size_t *len)

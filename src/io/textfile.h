@@ -12,6 +12,7 @@ typedef struct {
     FILE *f;         /* write here between open and commit */
     char tmp[4096];
     char path[4096];
+    int partial;     /* slot of tmp among the outputs in progress */
 } sasnav_text_out;
 
 /* Creates the temporary file (mode 0644). SASNAV_ERR_IO / SASNAV_ERR_ARG
@@ -24,6 +25,13 @@ int sasnav_text_commit(sasnav_text_out *out);
 
 /* Closes and removes the temporary file (after a failure of the caller). */
 void sasnav_text_abort(sasnav_text_out *out);
+
+/* Outputs in progress (src/io/partial.c): a temporary file is registered
+ * when created (the slot returned, -1 when none is free) and unregistered
+ * when renamed or removed; sasnav_remove_partial_outputs (io.h) removes the
+ * registered ones from a signal handler. */
+int sasnav_partial_add(const char *tmp_path);
+void sasnav_partial_remove(int slot);
 
 /* Reads the whole regular file `path` (at most max_bytes bytes) into a
  * NUL-terminated buffer (*text, to free(); *len bytes, may be NULL).

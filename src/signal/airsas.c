@@ -220,6 +220,14 @@ int sasnav_airsas_to_run(const sasnav_airsas *rec, const sasnav_airsas *backgrou
     r->speed = 0;
     r->tx_lag = 0;
     r->range_of_interest = o.radius;
+    /* the recording's numbers may still make an invalid run (a Group Delay
+     * that puts the whole window before t = 0, an angle step that overflows
+     * ping_spacing): found by fuzz_airsas_dir, docs/fuzzing.md */
+    rc = sasnav_run_check(r);
+    if (rc) {
+        sasnav_run_free(r);
+        return sasnav_prefix_error(rc, "airsas");
+    }
     *run = r;
     return SASNAV_OK;
 }
