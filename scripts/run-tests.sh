@@ -14,3 +14,6 @@ cmake --build build-asan -j"$JOBS"
 ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions="$(pwd)/tests/lsan.supp" \
 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build-asan --output-on-failure -j"$JOBS"
+# Coverage-guided fuzzing of every reader, briefly (docs/fuzzing.md; clang's
+# libFuzzer): fails on any crash, leak or hang found.
+sh scripts/fuzz.sh 15 run_h5 nav_h5 image_h5 config tank_dir airsas_dir cli_args
