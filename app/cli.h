@@ -5,6 +5,8 @@
 #include "sasnav/error.h"
 #include "sasnav/image.h"
 
+#include <getopt.h>
+
 /* Prints "sasnav COMMAND: message" (with the library's last error when rc is
  * a library code) and returns 1, for `return cli_fail(...)`. */
 int cli_fail(const char *command, int rc, const char *fmt, ...)
@@ -12,6 +14,32 @@ int cli_fail(const char *command, int rc, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+
+/* Exit statuses of the tool: 0 success, 1 a runtime failure (missing or
+ * corrupt input, a computation that failed, an output that could not be
+ * written), 2 a usage error (unknown or malformed option, missing argument,
+ * conflicting options). */
+enum { CLI_OK = 0, CLI_FAILURE = 1, CLI_USAGE = 2 };
+
+/* Prints "sasnav COMMAND: message" and a pointer to the command's help;
+ * returns CLI_USAGE, for `return cli_usage(...)`. */
+int cli_usage(const char *command, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* Edit distance (insertions, deletions, substitutions, transpositions). */
+int cli_distance(const char *a, const char *b);
+
+/* The candidate nearest to `word` (edit distance <= max(2, |word| / 3), or
+ * a candidate that `word` begins); NULL when none is near. */
+const char *cli_nearest(const char *word, const char *const *candidates, int n);
+
+/* The usage error for what getopt_long returned '?' or ':' on (call with
+ * opterr = 0): an unknown option (with the nearest known one suggested) or
+ * an option missing its argument. Returns CLI_USAGE. */
+int cli_bad_option(const char *command, char **argv, const struct option *longopts);
 
 /* Parses exactly n comma-separated finite doubles. Returns 0 on success. */
 int cli_parse_doubles(const char *text, int n, double *out);

@@ -23,6 +23,85 @@ int cli_fail(const char *command, int rc, const char *fmt, ...)
     return 1;
 }
 
+int cli_usage(const char *command, const char *fmt, ...)
+{
+    fprintf(stderr, "sasnav %s: ", command);
+    va_list ap;
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fprintf(stderr, " (see 'sasnav %s --help')\n", command);
+    return CLI_USAGE;
+}
+
+int cli_distance(const char *a, const char *b)
+{
+    size_t n = strlen(a), m = strlen(b);
+    if (n > 63 || m > 63) return 64;
+    int d[64][64];
+    for (size_t i = 0; i <= n; i++) d[i][0] = (int)i;
+    for (size_t j = 0; j <= m; j++) d[0][j] = (int)j;
+    for (size_t i = 1; i <= n; i++)
+        for (size_t j = 1; j <= m; j++) {
+            int c = a[i - 1] != b[j - 1];
+            int v = d[i - 1][j] + 1;
+            if (d[i][j - 1] + 1 < v) v = d[i][j - 1] + 1;
+            if (d[i - 1][j - 1] + c < v) v = d[i - 1][j - 1] + c;
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] &&
+                d[i - 2][j - 2] + 1 < v)
+                v = d[i - 2][j - 2] + 1;
+            d[i][j] = v;
+        }
+    return d[n][m];
+}
+
+const char *cli_nearest(const char *word, const char *const *candidates, int n)
+{
+    const char *best = NULL;
+    int best_d = 1 << 30;
+    size_t len = strlen(word);
+    int limit = (int)len / 3 > 2 ? (int)len / 3 : 2;
+    for (int k = 0; k < n; k++) {
+        int d = cli_distance(word, candidates[k]);
+        if (len >= 2 && !strncmp(candidates[k], word, len)) d = 1; /* an abbreviation */
+        if (d < best_d) {
+            best_d = d;
+            best = candidates[k];
+        }
+    }
+    return best_d <= limit ? best : NULL;
+}
+
+int cli_bad_option(const char *command, char **argv, const struct option *longopts)
+{
+    const char *token = optind > 0 ? argv[optind - 1] : "";
+    if (optopt && optopt != '?' && (token[0] != '-' || token[1] != '-')) {
+        for (int k = 0; longopts[k].name; k++)
+            if (longopts[k].val == optopt && longopts[k].has_arg == required_argument)
+                return cli_usage(command, "option -%c needs a value", optopt);
+        return cli_usage(command, "unknown option '-%c'", optopt);
+    }
+    char name[64];
+    const char *body = token[0] == '-' && token[1] == '-' ? token + 2 : token;
+    size_t len = strcspn(body, "=");
+    if (len >= sizeof name) len = sizeof name - 1;
+    memcpy(name, body, len);
+    name[len] = '\0';
+    const char *names[128];
+    int n = 0;
+    for (int k = 0; longopts[k].name && n < 128; k++) {
+        if (!strcmp(longopts[k].name, name)) {
+            if (longopts[k].has_arg == no_argument)
+                return cli_usage(command, "option '--%s' takes no value", name);
+            return cli_usage(command, "option '--%s' needs a value", name);
+        }
+        names[n++] = longopts[k].name;
+    }
+    const char *near = cli_nearest(name, names, n);
+    if (near) return cli_usage(command, "unknown option '%s' (did you mean '--%s'?)", token, near);
+    return cli_usage(command, "unknown option '%s'", token);
+}
+
 int cli_parse_double(const char *text, double *out)
 {
     if (!text || !*text) return -1;

@@ -211,23 +211,23 @@ int cmd_cuts(int argc, char **argv)
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         switch (opt) {
-        case 'P': if (cli_parse_int(optarg, 0, 1000000, &p)) return cli_fail("cuts", 0, "--p needs a ping index"); break;
-        case 'Q': if (cli_parse_int(optarg, 0, 1000000, &q)) return cli_fail("cuts", 0, "--q needs a ping index"); break;
-        case 'a': if (cli_parse_doubles(optarg, 3, around)) return cli_fail("cuts", 0, "--around needs S,W,Y"); have_around = 1; break;
+        case 'P': if (cli_parse_int(optarg, 0, 1000000, &p)) return cli_usage("cuts", "--p needs a ping index"); break;
+        case 'Q': if (cli_parse_int(optarg, 0, 1000000, &q)) return cli_usage("cuts", "--q needs a ping index"); break;
+        case 'a': if (cli_parse_doubles(optarg, 3, around)) return cli_usage("cuts", "--around needs S,W,Y"); have_around = 1; break;
         case 'T': around_truth = 1; break;
-        case 's': if (cli_parse_doubles(optarg, 3, span) || !(span[0] > 0 && span[1] > 0 && span[2] > 0)) return cli_fail("cuts", 0, "--span needs three positive numbers"); break;
-        case 'n': if (cli_parse_int(optarg, 3, 10001, &n)) return cli_fail("cuts", 0, "--n needs 3..10001"); break;
-        case 'k': if (cli_parse_int(optarg, 1, 100, &k)) return cli_fail("cuts", 0, "--k needs 1..100"); break;
-        case 'i': if (cli_parse_int(optarg, 1, 100, &iters)) return cli_fail("cuts", 0, "--i needs 1..100"); break;
+        case 's': if (cli_parse_doubles(optarg, 3, span) || !(span[0] > 0 && span[1] > 0 && span[2] > 0)) return cli_usage("cuts", "--span needs three positive numbers"); break;
+        case 'n': if (cli_parse_int(optarg, 3, 10001, &n)) return cli_usage("cuts", "--n needs 3..10001"); break;
+        case 'k': if (cli_parse_int(optarg, 1, 100, &k)) return cli_usage("cuts", "--k needs 1..100"); break;
+        case 'i': if (cli_parse_int(optarg, 1, 100, &iters)) return cli_usage("cuts", "--i needs 1..100"); break;
         case 'M': maps = 1; break;
         case 'r': preset = optarg; break;
-        case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_fail("cuts", 0, "--threads needs 0..1024"); break;
+        case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_usage("cuts", "--threads needs 0..1024"); break;
         case 'o': dir = optarg; break;
         case 'h': fputs(help, stdout); return 0;
-        default: fputs(help, stderr); return 2;
+        default: return cli_bad_option("cuts", argv, longopts);
         }
     }
-    if (!dir) return cli_fail("cuts", 0, "an output directory is required (-o DIR)");
+    if (!dir) return cli_usage("cuts", "an output directory is required (-o DIR)");
     if (make_dir(dir)) return cli_fail("cuts", 0, "cannot create directory %s", dir);
     sasnav_pair_opts po;
     sasnav_pair_default_opts(&po);
@@ -235,10 +235,10 @@ int cmd_cuts(int argc, char **argv)
     po.k = (int)(k > 0 ? k : maps ? 2 : 8);
     po.i = (int)(iters > 0 ? iters : maps ? 1 : 8);
     if (maps) {
-        if (optind != argc) return cli_fail("cuts", 0, "--maps takes no run file");
+        if (optind != argc) return cli_usage("cuts", "--maps takes no run file");
         return maps_of_preset(preset, (int)(n > 0 ? n : 21), &po, dir);
     }
-    if (optind != argc - 1) return cli_fail("cuts", 0, "exactly one input run file is required");
+    if (optind != argc - 1) return cli_usage("cuts", "exactly one input run file is required");
     return cuts_of_run(argv[optind], p, q, around, have_around, around_truth, span, (int)(n > 0 ? n : 81),
                        &po, dir);
 }

@@ -379,15 +379,15 @@ int cmd_demo(int argc, char **argv)
         case 'o': d.dir = optarg; break;
         case 't':
             if (cli_parse_int(optarg, 0, 1024, &threads))
-                return cli_fail("demo", 0, "--threads needs an integer 0..1024");
+                return cli_usage("demo", "--threads needs an integer 0..1024");
             break;
         case 'q': d.quick = 1; break;
         case 'h': fputs(help, stdout); return 0;
-        default: fputs(help, stderr); return 2;
+        default: return cli_bad_option("demo", argv, longopts);
         }
     }
-    if (optind < argc) return cli_fail("demo", 0, "unexpected argument '%s'", argv[optind]);
-    if (!d.dir[0]) return cli_fail("demo", 0, "-o needs a directory name");
+    if (optind < argc) return cli_usage("demo", "unexpected argument '%s'", argv[optind]);
+    if (!d.dir[0]) return cli_usage("demo", "-o needs a directory name");
     d.threads = (int)threads;
     int rc = run_demo(&d);
     if (!rc) {

@@ -101,35 +101,35 @@ int cmd_image(int argc, char **argv)
         case 'P': png = optarg; break;
         case 'd':
             if (cli_parse_double(optarg, &dr) || !(dr > 0))
-                return cli_fail("image", 0, "--dynamic-range needs a positive number of dB");
+                return cli_usage("image", "--dynamic-range needs a positive number of dB");
             break;
         case 't':
             if (cli_parse_int(optarg, 0, 1024, &threads))
-                return cli_fail("image", 0, "--threads needs an integer 0..1024");
+                return cli_usage("image", "--threads needs an integer 0..1024");
             break;
         case 'o': output = optarg; break;
         case 'p':
-            if (cli_parse_int(optarg, 0, 10000000, &ping)) return cli_fail("image", 0, "--ping needs a ping index");
+            if (cli_parse_int(optarg, 0, 10000000, &ping)) return cli_usage("image", "--ping needs a ping index");
             break;
         case 'k':
-            if (cli_parse_int(optarg, 1, 10000, &cgls)) return cli_fail("image", 0, "--cgls needs 1..10000 iterations");
+            if (cli_parse_int(optarg, 1, 10000, &cgls)) return cli_usage("image", "--cgls needs 1..10000 iterations");
             break;
         case 'L':
             if (cli_parse_double(optarg, &tikhonov) || tikhonov < 0)
-                return cli_fail("image", 0, "--tikhonov needs a number >= 0");
+                return cli_usage("image", "--tikhonov needs a number >= 0");
             break;
         case 'h': fputs(help, stdout); return 0;
-        default: fputs(help, stderr); return 2;
+        default: return cli_bad_option("image", argv, longopts);
         }
     }
-    if (optind != argc - 1) return cli_fail("image", 0, "exactly one input run file is required");
-    if (cgls && ping < 0) return cli_fail("image", 0, "--cgls needs --ping");
-    if (!output) return cli_fail("image", 0, "an output file is required (-o image.h5)");
-    if (navfile && use_truth) return cli_fail("image", 0, "--nav and --truth exclude each other");
+    if (optind != argc - 1) return cli_usage("image", "exactly one input run file is required");
+    if (cgls && ping < 0) return cli_usage("image", "--cgls needs --ping");
+    if (!output) return cli_usage("image", "an output file is required (-o image.h5)");
+    if (navfile && use_truth) return cli_usage("image", "--nav and --truth exclude each other");
     const char *input = argv[optind];
     sasnav_grid grid;
     if (gridtext && cli_parse_grid(gridtext, &grid))
-        return cli_fail("image", 0, "--grid needs X0,X1,NX,Y0,Y1,NY with X1 > X0, Y1 > Y0, NX, NY >= 2");
+        return cli_usage("image", "--grid needs X0,X1,NX,Y0,Y1,NY with X1 > X0, Y1 > Y0, NX, NY >= 2");
 
     sasnav_run *run = NULL;
     int rc = sasnav_run_read(input, &run);

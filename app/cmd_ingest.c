@@ -1,5 +1,7 @@
 /* sasnav ingest: real recordings -> a run file (baseband, pulse-compressed). */
 #include "cli.h"
+
+#include <omp.h>
 #include "sasnav/airsas.h"
 #include "sasnav/io.h"
 
@@ -41,6 +43,7 @@ static const char *help =
     "  --radius M          sensor circle radius (default 0.85)\n"
     "  --clip-run N        refuse records with N equal samples at their extreme\n"
     "                      value (default 3; 0: no check)\n"
+    "  --threads N         OpenMP threads (default: all cores)\n"
     "  -o FILE             output run file (HDF5)\n";
 
 static int parse_taper(const char *s, sasnav_taper *t)
@@ -63,6 +66,7 @@ int cmd_ingest(int argc, char **argv)
         {"bandwidth", required_argument, 0, 'B'},  {"no-room", no_argument, 0, 'R'},
         {"radius", required_argument, 0, 'r'},     {"clip-run", required_argument, 0, 'c'},
         {"output", required_argument, 0, 'o'},     {"help", no_argument, 0, 'h'},
+        {"threads", required_argument, 0, 'N'},
         {"wav", required_argument, 0, 'w'},        {"range", required_argument, 0, 'G'},
         {0, 0, 0, 0}};
     const char *dir = NULL, *bgdir = NULL, *output = NULL, *wavdir = NULL;
@@ -79,76 +83,83 @@ int cmd_ingest(int argc, char **argv)
         case 'a': dir = optarg; break;
         case 'b': bgdir = optarg; break;
         case 'm':
-            if (cli_parse_int(optarg, 1, 2, &v)) return cli_fail("ingest", 0, "--mic needs 1 or 2");
+            if (cli_parse_int(optarg, 1, 2, &v)) return cli_usage("ingest", "--mic needs 1 or 2");
             o.microphone = (int)v;
             break;
         case 'F':
             if (cli_parse_int(optarg, 0, 1000000, &v))
-                return cli_fail("ingest", 0, "--first needs a ping index >= 0");
+                return cli_usage("ingest", "--first needs a ping index >= 0");
             o.first_ping = (int)v;
             break;
         case 's':
             if (cli_parse_int(optarg, 1, 1000000, &v))
-                return cli_fail("ingest", 0, "--stride needs an integer >= 1");
+                return cli_usage("ingest", "--stride needs an integer >= 1");
             o.ping_stride = (int)v;
             break;
         case 'n':
             if (cli_parse_int(optarg, 1, 1000000, &v))
-                return cli_fail("ingest", 0, "--pings needs an integer >= 1");
+                return cli_usage("ingest", "--pings needs an integer >= 1");
             o.max_pings = (int)v;
             break;
         case 'D':
             if (cli_parse_int(optarg, 1, 1000000, &v))
-                return cli_fail("ingest", 0, "--decimation needs an integer >= 1");
+                return cli_usage("ingest", "--decimation needs an integer >= 1");
             o.decimation = (int)v;
             decimation_given = 1;
             break;
         case 'w': wavdir = optarg; break;
         case 'G':
             if (cli_parse_double(optarg, &d) || !(d > 0))
-                return cli_fail("ingest", 0, "--range needs a range > 0 (m)");
+                return cli_usage("ingest", "--range needs a range > 0 (m)");
             range = d;
             break;
         case 'M': o.compression = SASNAV_COMPRESS_MATCHED; break;
         case 'T':
             if (parse_taper(optarg, &o.taper))
-                return cli_fail("ingest", 0, "--taper needs none, hann or hamming");
+                return cli_usage("ingest", "--taper needs none, hann or hamming");
             break;
         case 'f':
             if (cli_parse_double(optarg, &d) || !(d > 0))
-                return cli_fail("ingest", 0, "--f0 needs a frequency > 0 (Hz)");
+                return cli_usage("ingest", "--f0 needs a frequency > 0 (Hz)");
             o.f0 = d;
             break;
         case 'B':
             if (cli_parse_double(optarg, &d) || !(d > 0))
-                return cli_fail("ingest", 0, "--bandwidth needs a frequency > 0 (Hz)");
+                return cli_usage("ingest", "--bandwidth needs a frequency > 0 (Hz)");
             o.bandwidth = d;
             break;
         case 'R': o.remove_room = 0; break;
         case 'r':
             if (cli_parse_double(optarg, &d) || !(d > 0))
-                return cli_fail("ingest", 0, "--radius needs a length > 0 (m)");
+                return cli_usage("ingest", "--radius needs a length > 0 (m)");
             o.radius = d;
             break;
         case 'c':
             if (cli_parse_int(optarg, 0, 1000000, &v) || v == 1)
-                return cli_fail("ingest", 0, "--clip-run needs 0 (off) or an integer >= 2");
+                return cli_usage("ingest", "--clip-run needs 0 (off) or an integer >= 2");
             o.clip_run = (int)v;
             break;
         case 'o': output = optarg; break;
+        case 'N': {
+            long threads;
+            if (cli_parse_int(optarg, 0, 1024, &threads))
+                return cli_usage("ingest", "--threads needs an integer 0..1024");
+            if (threads > 0) omp_set_num_threads((int)threads);
+            break;
+        }
         case 'h': fputs(help, stdout); return 0;
-        default: fputs(help, stderr); return 2;
+        default: return cli_bad_option("ingest", argv, longopts);
         }
     }
     if (optind != argc)
-        return cli_fail("ingest", 0, "unexpected argument '%s' (inputs are given with --airsas)",
+        return cli_usage("ingest", "unexpected argument '%s' (inputs are given with --airsas)",
                         argv[optind]);
     if (wavdir) {
-        if (!output) return cli_fail("ingest", 0, "an output file is required (-o run.h5)");
+        if (!output) return cli_usage("ingest", "an output file is required (-o run.h5)");
         return cmd_ingest_wav(wavdir, decimation_given ? o.decimation : 0, range, output);
     }
-    if (!dir) return cli_fail("ingest", 0, "an input is required (--airsas DIR or --wav DIR)");
-    if (!output) return cli_fail("ingest", 0, "an output file is required (-o run.h5)");
+    if (!dir) return cli_usage("ingest", "an input is required (--airsas DIR or --wav DIR)");
+    if (!output) return cli_usage("ingest", "an output file is required (-o run.h5)");
 
     sasnav_airsas *rec = NULL, *bg = NULL;
     int rc = sasnav_airsas_read(dir, &rec);

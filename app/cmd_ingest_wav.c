@@ -14,8 +14,8 @@ int cmd_ingest_wav(const char *dir, int decimation, double range, const char *ou
  * Returns 0 or 1 (message printed), like the other commands. */
 int cmd_ingest_wav(const char *dir, int decimation, double range, const char *output)
 {
-    if (!dir) return cli_fail("ingest", 0, "an input directory is required (--wav DIR)");
-    if (!output) return cli_fail("ingest", 0, "an output file is required (-o run.h5)");
+    if (!dir) return cli_usage("ingest", "an input directory is required (--wav DIR)");
+    if (!output) return cli_usage("ingest", "an output file is required (-o run.h5)");
     sasnav_tank_read_opts o;
     sasnav_tank_default_read_opts(&o);
     if (decimation >= 1) o.decimation = decimation;

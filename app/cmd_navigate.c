@@ -270,47 +270,47 @@ int cmd_navigate(int argc, char **argv)
             if (!strcmp(optarg, "subspace")) no.method = SASNAV_METHOD_SUBSPACE;
             else if (!strcmp(optarg, "dpca")) no.method = SASNAV_METHOD_DPCA;
             else if (!strcmp(optarg, "aiding")) no.method = SASNAV_METHOD_AIDING;
-            else return cli_fail("navigate", 0, "--method needs subspace, dpca or aiding (got '%s')", optarg);
+            else return cli_usage("navigate", "--method needs subspace, dpca or aiding (got '%s')", optarg);
             break;
         case 'L': no.long_baselines = 1; break;
         case 'k':
-            if (cli_parse_int(optarg, 1, 100, &k)) return cli_fail("navigate", 0, "--k needs 1..100");
+            if (cli_parse_int(optarg, 1, 100, &k)) return cli_usage("navigate", "--k needs 1..100");
             break;
         case 'i':
-            if (cli_parse_int(optarg, 1, 100, &iters)) return cli_fail("navigate", 0, "--i needs 1..100");
+            if (cli_parse_int(optarg, 1, 100, &iters)) return cli_usage("navigate", "--i needs 1..100");
             break;
         case 't':
             if (cli_parse_int(optarg, 0, 1024, &threads))
-                return cli_fail("navigate", 0, "--threads needs an integer 0..1024");
+                return cli_usage("navigate", "--threads needs an integer 0..1024");
             break;
         case 'y':
             if (cli_parse_double(optarg, &no.pair.yaw_sigma) || !(no.pair.yaw_sigma >= 0))
-                return cli_fail("navigate", 0, "--yaw-sigma needs a standard deviation >= 0 (rad)");
+                return cli_usage("navigate", "--yaw-sigma needs a standard deviation >= 0 (rad)");
             break;
         case 'U':
             if (cli_parse_double(optarg, &no.pair.surge_sigma) || !(no.pair.surge_sigma >= 0))
-                return cli_fail("navigate", 0, "--surge-sigma needs a scale >= 0 (m)");
+                return cli_usage("navigate", "--surge-sigma needs a scale >= 0 (m)");
             break;
         case 'f':
-            if (cli_parse_doubles(optarg, 3, first)) return cli_fail("navigate", 0, "--first-pose needs X,Y,YAW");
+            if (cli_parse_doubles(optarg, 3, first)) return cli_usage("navigate", "--first-pose needs X,Y,YAW");
             have_first = 1;
             break;
         case 'A': anchor_truth = 1; break;
         case 'F': no.pair.fix_yaw = 1; break;
         case 'X':
             if (cli_parse_double(optarg, &no.pair.cross_extent) || !(no.pair.cross_extent > 0))
-                return cli_fail("navigate", 0, "--cross-extent needs a positive length (m)");
+                return cli_usage("navigate", "--cross-extent needs a positive length (m)");
             break;
         case 'E':
             if (cli_parse_double(optarg, &no.pair.range_extent) ||
                 !(no.pair.range_extent > 0 && no.pair.range_extent <= 100))
-                return cli_fail("navigate", 0, "--range-extent needs a length in (0, 100] m");
+                return cli_usage("navigate", "--range-extent needs a length in (0, 100] m");
             break;
         case 'N': no.use_aiding = 0; break;
         case 'B': {
             double ab[3];
             if (cli_parse_doubles(optarg, 3, ab) || !(ab[0] >= 0 && ab[1] >= 0 && ab[2] >= 0))
-                return cli_fail("navigate", 0, "--aiding-bias needs three standard deviations >= 0");
+                return cli_usage("navigate", "--aiding-bias needs three standard deviations >= 0");
             no.aiding_bias_sigma = (sasnav_pose){ab[0], ab[1], ab[2]};
             break;
         }
@@ -318,26 +318,26 @@ int cmd_navigate(int argc, char **argv)
             if (!strcmp(optarg, "none")) no.speed_lags = 0;
             else if (!strcmp(optarg, "dvl")) no.speed_lags = 1;
             else if (!strcmp(optarg, "pairs")) no.speed_lags = 2;
-            else return cli_fail("navigate", 0, "--speed-lags needs none, dvl or pairs (got '%s')", optarg);
+            else return cli_usage("navigate", "--speed-lags needs none, dvl or pairs (got '%s')", optarg);
             break;
         case 'R': no.resolve = 0; break;
         case 'M': {
             double ms[3];
             if (cli_parse_doubles(optarg, 3, ms) || !(ms[0] > 0 && ms[1] > 0 && ms[2] > 0))
-                return cli_fail("navigate", 0, "--motion-sigma needs three standard deviations > 0");
+                return cli_usage("navigate", "--motion-sigma needs three standard deviations > 0");
             no.motion_sigma = (sasnav_pose){ms[0], ms[1], ms[2]};
             break;
         }
         case 'j': json = 1; break;
         case 'o': output = optarg; break;
         case 'h': fputs(help, stdout); return 0;
-        default: fputs(help, stderr); return 2;
+        default: return cli_bad_option("navigate", argv, longopts);
         }
     }
-    if (optind != argc - 1) return cli_fail("navigate", 0, "exactly one input run file is required");
-    if (!output) return cli_fail("navigate", 0, "an output file is required (-o nav.h5)");
+    if (optind != argc - 1) return cli_usage("navigate", "exactly one input run file is required");
+    if (!output) return cli_usage("navigate", "an output file is required (-o nav.h5)");
     if (have_first && anchor_truth)
-        return cli_fail("navigate", 0, "--first-pose and --anchor-truth exclude each other");
+        return cli_usage("navigate", "--first-pose and --anchor-truth exclude each other");
     const char *input = argv[optind];
     no.pair.k = (int)k;
     no.pair.i = (int)iters;

@@ -84,46 +84,46 @@ int cmd_pair(int argc, char **argv)
     optind = 1;
     while ((opt = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
         switch (opt) {
-        case 'P': if (cli_parse_int(optarg, 0, 1000000, &p)) return cli_fail("pair", 0, "--p needs a ping index"); have_p = 1; break;
-        case 'Q': if (cli_parse_int(optarg, 0, 1000000, &q)) return cli_fail("pair", 0, "--q needs a ping index"); have_q = 1; break;
+        case 'P': if (cli_parse_int(optarg, 0, 1000000, &p)) return cli_usage("pair", "--p needs a ping index"); have_p = 1; break;
+        case 'Q': if (cli_parse_int(optarg, 0, 1000000, &q)) return cli_usage("pair", "--q needs a ping index"); have_q = 1; break;
         case 'j': json = 1; break;
-        case 'k': if (cli_parse_int(optarg, 1, 100, &k)) return cli_fail("pair", 0, "--k needs 1..100"); break;
-        case 'i': if (cli_parse_int(optarg, 1, 100, &iters)) return cli_fail("pair", 0, "--i needs 1..100"); break;
-        case 'r': if (cli_parse_doubles(optarg, 3, prior)) return cli_fail("pair", 0, "--prior needs SURGE,SWAY,YAW"); break;
+        case 'k': if (cli_parse_int(optarg, 1, 100, &k)) return cli_usage("pair", "--k needs 1..100"); break;
+        case 'i': if (cli_parse_int(optarg, 1, 100, &iters)) return cli_usage("pair", "--i needs 1..100"); break;
+        case 'r': if (cli_parse_doubles(optarg, 3, prior)) return cli_usage("pair", "--prior needs SURGE,SWAY,YAW"); break;
         case 'G': no_global = 1; break;
         case 'b':
             if (cli_parse_doubles(optarg, 3, box) || !(box[0] > 0 && box[1] > 0 && box[2] > 0))
-                return cli_fail("pair", 0, "--box needs three positive half-widths S,W,Y");
+                return cli_usage("pair", "--box needs three positive half-widths S,W,Y");
             break;
         case 'F': fix_yaw = 1; break;
         case 'X':
             if (cli_parse_double(optarg, &cross_extent) || !(cross_extent > 0))
-                return cli_fail("pair", 0, "--cross-extent needs a positive length (m)");
+                return cli_usage("pair", "--cross-extent needs a positive length (m)");
             break;
         case 'E':
             if (cli_parse_double(optarg, &range_extent) || !(range_extent > 0 && range_extent <= 100))
-                return cli_fail("pair", 0, "--range-extent needs a length in (0, 100] m");
+                return cli_usage("pair", "--range-extent needs a length in (0, 100] m");
             break;
         case 'y':
             if (cli_parse_double(optarg, &yaw_sigma) || !(yaw_sigma >= 0))
-                return cli_fail("pair", 0, "--yaw-sigma needs a standard deviation >= 0 (rad)");
+                return cli_usage("pair", "--yaw-sigma needs a standard deviation >= 0 (rad)");
             break;
         case 'U':
             if (cli_parse_double(optarg, &surge_sigma) || !(surge_sigma >= 0))
-                return cli_fail("pair", 0, "--surge-sigma needs a scale >= 0 (m)");
+                return cli_usage("pair", "--surge-sigma needs a scale >= 0 (m)");
             break;
-        case 'S': if (cli_parse_int(optarg, 1, 64, &nsub)) return cli_fail("pair", 0, "--subintervals needs 1..64"); break;
-        case 'R': if (cli_parse_double(optarg, &range) || !(range > 0)) return cli_fail("pair", 0, "--range needs a positive number"); break;
-        case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_fail("pair", 0, "--threads needs 0..1024"); break;
+        case 'S': if (cli_parse_int(optarg, 1, 64, &nsub)) return cli_usage("pair", "--subintervals needs 1..64"); break;
+        case 'R': if (cli_parse_double(optarg, &range) || !(range > 0)) return cli_usage("pair", "--range needs a positive number"); break;
+        case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_usage("pair", "--threads needs 0..1024"); break;
         case 'L':
             if (!strcmp(optarg, "motion")) motion_lag = 1;
-            else if (strcmp(optarg, "fixed")) return cli_fail("pair", 0, "--lag-model is 'fixed' or 'motion'");
+            else if (strcmp(optarg, "fixed")) return cli_usage("pair", "--lag-model is 'fixed' or 'motion'");
             break;
         case 'h': fputs(help, stdout); return 0;
-        default: fputs(help, stderr); return 2;
+        default: return cli_bad_option("pair", argv, longopts);
         }
     }
-    if (optind != argc - 1) return cli_fail("pair", 0, "exactly one input run file is required");
+    if (optind != argc - 1) return cli_usage("pair", "exactly one input run file is required");
     if (have_p && !have_q) q = p + 1;
     if (have_q && !have_p) p = q - 1;
     const char *input = argv[optind];
@@ -132,7 +132,7 @@ int cmd_pair(int argc, char **argv)
     if (rc) return cli_fail("pair", rc, "cannot read %s", input);
     if (p == q) {
         sasnav_run_free(run);
-        return cli_fail("pair", 0, "--p and --q name the same ping (%ld)", p);
+        return cli_usage("pair", "--p and --q name the same ping (%ld)", p);
     }
     if (p < 0 || q < 0 || p >= run->n_pings || q >= run->n_pings) {
         int n = run->n_pings;

@@ -55,31 +55,31 @@ int cmd_refine(int argc, char **argv)
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         switch (opt) {
-        case 'g': if (cli_parse_grid(optarg, &ro.grid)) return cli_fail("refine", 0, "--grid needs X0,X1,NX,Y0,Y1,NY"); break;
+        case 'g': if (cli_parse_grid(optarg, &ro.grid)) return cli_usage("refine", "--grid needs X0,X1,NX,Y0,Y1,NY"); break;
         case 's':
             if (cli_parse_int(optarg, 1, SASNAV_REFINE_MAX_SWEEPS, &sweeps))
-                return cli_fail("refine", 0, "--sweeps needs 1..%d", SASNAV_REFINE_MAX_SWEEPS);
+                return cli_usage("refine", "--sweeps needs 1..%d", SASNAV_REFINE_MAX_SWEEPS);
             break;
         case 'u':
             if (cli_parse_double(optarg, &ro.surge_range) || !(ro.surge_range > 0 && ro.surge_range <= 1))
-                return cli_fail("refine", 0, "--surge-range needs a half-width in (0, 1] m");
+                return cli_usage("refine", "--surge-range needs a half-width in (0, 1] m");
             break;
         case 'v':
             if (cli_parse_double(optarg, &ro.sway_range) || !(ro.sway_range > 0 && ro.sway_range <= 1))
-                return cli_fail("refine", 0, "--sway-range needs a half-width in (0, 1] m");
+                return cli_usage("refine", "--sway-range needs a half-width in (0, 1] m");
             break;
         case 'e':
             if (cli_parse_double(optarg, &ro.sparsity) || !(ro.sparsity >= 0 && ro.sparsity <= 1e6))
-                return cli_fail("refine", 0, "--sparsity needs a number in [0, 1e6]");
+                return cli_usage("refine", "--sparsity needs a number in [0, 1e6]");
             break;
-        case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_fail("refine", 0, "--threads needs 0..1024"); break;
+        case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_usage("refine", "--threads needs 0..1024"); break;
         case 'o': output = optarg; break;
         case 'h': fputs(help, stdout); return 0;
-        default: fputs(help, stderr); return 2;
+        default: return cli_bad_option("refine", argv, longopts);
         }
     }
-    if (optind != argc - 2) return cli_fail("refine", 0, "a run file and a navigation file are required");
-    if (!output) return cli_fail("refine", 0, "an output file is required (-o FILE)");
+    if (optind != argc - 2) return cli_usage("refine", "a run file and a navigation file are required");
+    if (!output) return cli_usage("refine", "an output file is required (-o FILE)");
     ro.sweeps = (int)sweeps;
     ro.nthreads = (int)threads;
     const char *run_path = argv[optind], *nav_path = argv[optind + 1];

@@ -59,21 +59,21 @@ int cmd_simulate(int argc, char **argv)
         case 'e': error = optarg; break;
         case 't':
             if (cli_parse_int(optarg, 0, 1024, &threads))
-                return cli_fail("simulate", 0, "--threads needs an integer 0..1024");
+                return cli_usage("simulate", "--threads needs an integer 0..1024");
             break;
         case 'o': output = optarg; break;
         case 'O': omni = 1; break;
         case 'A': aiding = 1; break;
         case 'h': fputs(help, stdout); return 0;
-        default: fputs(help, stderr); return 2;
+        default: return cli_bad_option("simulate", argv, longopts);
         }
     }
-    if (optind < argc) return cli_fail("simulate", 0, "unexpected argument '%s'", argv[optind]);
-    if (!output) return cli_fail("simulate", 0, "an output file is required (-o run.h5)");
-    if (omni && strcmp(preset, "tank")) return cli_fail("simulate", 0, "--omni applies to --preset tank only");
+    if (optind < argc) return cli_usage("simulate", "unexpected argument '%s'", argv[optind]);
+    if (!output) return cli_usage("simulate", "an output file is required (-o run.h5)");
+    if (omni && strcmp(preset, "tank")) return cli_usage("simulate", "--omni applies to --preset tank only");
     if (!strcmp(preset, "tank")) {
         if (config || snr || error || aiding)
-            return cli_fail("simulate", 0, "--preset tank takes only --seed, --omni and -o DIR");
+            return cli_usage("simulate", "--preset tank takes only --seed, --omni and -o DIR");
         char *args[7] = {"tank", "-o", (char *)output, NULL, NULL, NULL, NULL};
         int na = 3;
         if (seed) {
@@ -92,21 +92,21 @@ int cmd_simulate(int argc, char **argv)
     if (seed) {
         long s;
         if (cli_parse_int(seed, 0, 0x7fffffffL, &s))
-            return cli_fail("simulate", 0, "--seed needs a non-negative integer");
+            return cli_usage("simulate", "--seed needs a non-negative integer");
         sasnav_scenario_seed(&sc, (uint64_t)s);
     }
     if (aiding) sc.aiding.enabled = 1;
     if (snr) {
         double v;
         if (!strcmp(snr, "inf")) sc.snr_db = INFINITY;
-        else if (cli_parse_double(snr, &v)) return cli_fail("simulate", 0, "--snr needs a number or 'inf'");
+        else if (cli_parse_double(snr, &v)) return cli_usage("simulate", "--snr needs a number or 'inf'");
         else sc.snr_db = v;
     }
     if (error) {
         double e[3];
         if (cli_parse_doubles(error, 3, e))
-            return cli_fail("simulate", 0, "--error needs SURGE,SWAY,YAW (three finite numbers)");
-        if (sc.traj.n_pings < 2) return cli_fail("simulate", 0, "--error needs at least two pings");
+            return cli_usage("simulate", "--error needs SURGE,SWAY,YAW (three finite numbers)");
+        if (sc.traj.n_pings < 2) return cli_usage("simulate", "--error needs at least two pings");
         sc.traj.has_pair_error = 1;
         sc.traj.pair_q = 1;
         sc.traj.pair_error = (sasnav_pose){e[0], e[1], e[2]};

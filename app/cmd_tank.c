@@ -1,5 +1,7 @@
 /* sasnav tank: the tank experiment of SPEC 4 as passband WAV recordings. */
 #include "cli.h"
+
+#include <omp.h>
 #include "sasnav/tank.h"
 
 #include <getopt.h>
@@ -34,6 +36,7 @@ static const char *help =
     "  --plate-range R    range of the plate centre (m, default 1.5); the\n"
     "                     reflectors keep their place on the plate\n"
     "  --noise STD        white noise std per passband sample (default 1e-3)\n"
+    "  --threads N OpenMP threads (default: all cores)\n"
     "  -o DIR      output directory (created if missing)\n";
 
 int cmd_tank(int argc, char **argv)
@@ -45,6 +48,7 @@ int cmd_tank(int argc, char **argv)
                                               {"noise", required_argument, 0, 'n'},
                                               {"output", required_argument, 0, 'o'},
                                               {"help", no_argument, 0, 'h'},
+                                              {"threads", required_argument, 0, 'N'},
                                               {0, 0, 0, 0}};
     const char *output = NULL;
     sasnav_tank_params p;
@@ -57,34 +61,41 @@ int cmd_tank(int argc, char **argv)
         switch (opt) {
         case 's':
             if (cli_parse_int(optarg, 0, 0x7fffffffL, &v))
-                return cli_fail("tank", 0, "--seed needs a non-negative integer");
+                return cli_usage("tank", "--seed needs a non-negative integer");
             p.seed = (uint64_t)v;
             break;
         case 'O': p.directivity = 0; break;
         case 'c':
             if (cli_parse_double(optarg, &d) || !(d >= 0))
-                return cli_fail("tank", 0, "--clutter needs a non-negative amplitude std");
+                return cli_usage("tank", "--clutter needs a non-negative amplitude std");
             p.clutter_std = d;
             break;
         case 'r':
             if (cli_parse_double(optarg, &d) || !(d > p.plate_radius) || !(d < p.range_max - p.plate_radius))
-                return cli_fail("tank", 0, "--plate-range needs a range keeping the plate in %g..%g m",
+                return cli_usage("tank", "--plate-range needs a range keeping the plate in %g..%g m",
                                 p.plate_radius, p.range_max);
             for (int i = 0; i < p.n_reflectors; i++) p.refl_y[i] += d - p.plate_y;
             p.plate_y = d;
             break;
         case 'n':
             if (cli_parse_double(optarg, &d) || !(d >= 0))
-                return cli_fail("tank", 0, "--noise needs a non-negative std");
+                return cli_usage("tank", "--noise needs a non-negative std");
             p.noise_std = d;
             break;
         case 'o': output = optarg; break;
+        case 'N': {
+            long threads;
+            if (cli_parse_int(optarg, 0, 1024, &threads))
+                return cli_usage("tank", "--threads needs an integer 0..1024");
+            if (threads > 0) omp_set_num_threads((int)threads);
+            break;
+        }
         case 'h': fputs(help, stdout); return 0;
-        default: fputs(help, stderr); return 2;
+        default: return cli_bad_option("tank", argv, longopts);
         }
     }
-    if (optind < argc) return cli_fail("tank", 0, "unexpected argument '%s'", argv[optind]);
-    if (!output) return cli_fail("tank", 0, "an output directory is required (-o DIR)");
+    if (optind < argc) return cli_usage("tank", "unexpected argument '%s'", argv[optind]);
+    if (!output) return cli_usage("tank", "an output directory is required (-o DIR)");
     int rc = sasnav_tank_write_dir(&p, output);
     if (rc) return cli_fail("tank", rc, "cannot write the recording to %s", output);
     fprintf(stderr, "sasnav tank: %d pings x %d channels x %d samples at %g kHz -> %s\n",

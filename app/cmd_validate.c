@@ -342,42 +342,42 @@ int cmd_validate(int argc, char **argv)
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         switch (opt) {
-        case 'a': if (cli_parse_int(optarg, 1, 127, &kmin)) return cli_fail("validate", 0, "--k-min needs 1..127"); break;
-        case 'b': if (cli_parse_int(optarg, 1, 127, &kmax)) return cli_fail("validate", 0, "--k-max needs 1..127"); break;
+        case 'a': if (cli_parse_int(optarg, 1, 127, &kmin)) return cli_usage("validate", "--k-min needs 1..127"); break;
+        case 'b': if (cli_parse_int(optarg, 1, 127, &kmax)) return cli_usage("validate", "--k-max needs 1..127"); break;
         case 'F': vo.nav.pair.fix_yaw = 1; break;
         case 'L': vo.nav.long_baselines = 1; break;
         case 'y':
             if (cli_parse_double(optarg, &vo.nav.pair.yaw_sigma) || !(vo.nav.pair.yaw_sigma >= 0))
-                return cli_fail("validate", 0, "--yaw-sigma needs a standard deviation >= 0 (rad)");
+                return cli_usage("validate", "--yaw-sigma needs a standard deviation >= 0 (rad)");
             break;
         case 'U':
             if (cli_parse_double(optarg, &vo.nav.pair.surge_sigma) || !(vo.nav.pair.surge_sigma >= 0))
-                return cli_fail("validate", 0, "--surge-sigma needs a scale >= 0 (m)");
+                return cli_usage("validate", "--surge-sigma needs a scale >= 0 (m)");
             break;
-        case 'k': if (cli_parse_int(optarg, 1, 100, &k)) return cli_fail("validate", 0, "--k needs 1..100"); break;
-        case 'i': if (cli_parse_int(optarg, 1, 100, &iters)) return cli_fail("validate", 0, "--i needs 1..100"); break;
-        case 'g': if (cli_parse_grid(optarg, &vo.grid)) return cli_fail("validate", 0, "--grid needs X0,X1,NX,Y0,Y1,NY"); break;
-        case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_fail("validate", 0, "--threads needs 0..1024"); break;
+        case 'k': if (cli_parse_int(optarg, 1, 100, &k)) return cli_usage("validate", "--k needs 1..100"); break;
+        case 'i': if (cli_parse_int(optarg, 1, 100, &iters)) return cli_usage("validate", "--i needs 1..100"); break;
+        case 'g': if (cli_parse_grid(optarg, &vo.grid)) return cli_usage("validate", "--grid needs X0,X1,NX,Y0,Y1,NY"); break;
+        case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_usage("validate", "--threads needs 0..1024"); break;
         case 'j': json = 1; break;
         case 'R': vo.refine = 1; break;
         case 's':
             if (cli_parse_int(optarg, 1, SASNAV_REFINE_MAX_SWEEPS, &sweeps))
-                return cli_fail("validate", 0, "--sweeps needs 1..%d", SASNAV_REFINE_MAX_SWEEPS);
+                return cli_usage("validate", "--sweeps needs 1..%d", SASNAV_REFINE_MAX_SWEEPS);
             break;
         case 'e':
             if (cli_parse_double(optarg, &vo.refine_opts.sparsity) ||
                 !(vo.refine_opts.sparsity >= 0 && vo.refine_opts.sparsity <= 1e6))
-                return cli_fail("validate", 0, "--sparsity needs a number in [0, 1e6]");
+                return cli_usage("validate", "--sparsity needs a number in [0, 1e6]");
             break;
         case 'o': output = optarg; break;
         case 'h': fputs(help, stdout); return 0;
-        default: fputs(help, stderr); return 2;
+        default: return cli_bad_option("validate", argv, longopts);
         }
     }
-    if (optind != argc - 1) return cli_fail("validate", 0, "exactly one input run file is required");
-    if (!output) return cli_fail("validate", 0, "an output directory is required (-o DIR)");
+    if (optind != argc - 1) return cli_usage("validate", "exactly one input run file is required");
+    if (!output) return cli_usage("validate", "an output directory is required (-o DIR)");
     if (vo.nav.pair.fix_yaw && vo.nav.pair.yaw_sigma > 0)
-        return cli_fail("validate", 0, "--fix-yaw and --yaw-sigma exclude each other");
+        return cli_usage("validate", "--fix-yaw and --yaw-sigma exclude each other");
     const char *input = argv[optind];
     vo.k_min = (int)kmin;
     vo.k_max = (int)kmax;

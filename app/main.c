@@ -23,7 +23,14 @@ static const char *usage =
     "  demo       paper-trajectory end to end: navigation, images, report\n"
     "  validate   the tank experiment's validation (K sub-sampled runs, SISO/SIMO)\n"
     "\n"
-    "Run 'sasnav COMMAND --help' for the options of a command.\n";
+    "options:\n"
+    "  --help     this text\n"
+    "  --version  the version of sasnav\n"
+    "\n"
+    "Run 'sasnav COMMAND --help' for the options of a command. Every command\n"
+    "that computes takes --threads N. Exit status: 0 success, 1 a failure\n"
+    "(missing or corrupt input, a computation or a write that failed), 2 a\n"
+    "usage error (unknown or malformed option, missing argument).\n";
 
 typedef struct {
     const char *name;
@@ -46,6 +53,7 @@ static const command commands[] = {
 int main(int argc, char **argv)
 {
     cli_install_signal_handlers();
+    opterr = 0; /* the commands report bad options themselves (cli_bad_option) */
     if (argc < 2) {
         fputs(usage, stderr);
         return 2;
@@ -60,6 +68,13 @@ int main(int argc, char **argv)
     }
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         if (!strcmp(argv[1], commands[i].name)) return commands[i].run(argc - 1, argv + 1);
-    fprintf(stderr, "sasnav: unknown command '%s'\n\n%s", argv[1], usage);
-    return 2;
+    const char *names[sizeof commands / sizeof commands[0]];
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++) names[i] = commands[i].name;
+    const char *near = cli_nearest(argv[1], names, (int)(sizeof names / sizeof names[0]));
+    if (near)
+        fprintf(stderr, "sasnav: unknown command '%s' (did you mean '%s'?)\n", argv[1], near);
+    else
+        fprintf(stderr, "sasnav: unknown command '%s'\n", argv[1]);
+    fputs("run 'sasnav --help' for the commands\n", stderr);
+    return CLI_USAGE;
 }

@@ -499,17 +499,17 @@ static void test_cli(void)
         CHECK(fabs(x + 0.04) <= 1.01 * g.dx && fabs(y - 0.06) <= 1.01 * g.dy, "CLI image peak at (%g, %g)", x, y);
         free(img);
     }
-    /* Refusals: exit status 1 and a message. */
+    /* Refusals: exit status 2 (usage) or 1 (runtime) and a message. */
     snprintf(args, sizeof args, "ingest -o '%s'", run_path);
-    CHECK(run_cli(args, &err) == 1 && strstr(err, "--airsas"), "no input: %s", err);
+    CHECK(run_cli(args, &err) == 2 && strstr(err, "--airsas"), "no input: %s", err);
     snprintf(args, sizeof args, "ingest --airsas '%s/nowhere' -o '%s'", test_tmpdir(), run_path);
     CHECK(run_cli(args, &err) == 1 && strstr(err, "cannot read") && strstr(err, "nowhere"), "missing dir: %s", err);
     snprintf(args, sizeof args, "ingest --airsas '%s' --decimation 6 -o '%s'", dir, run_path);
     CHECK(run_cli(args, &err) == 1 && strstr(err, "aliases"), "decimation 6: %s", err);
     snprintf(args, sizeof args, "ingest --airsas '%s' --clip-run 1 -o '%s'", dir, run_path);
-    CHECK(run_cli(args, &err) == 1 && strstr(err, "--clip-run"), "clip-run 1: %s", err);
+    CHECK(run_cli(args, &err) == 2 && strstr(err, "--clip-run"), "clip-run 1: %s", err);
     snprintf(args, sizeof args, "ingest --airsas '%s' --taper blackman -o '%s'", dir, run_path);
-    CHECK(run_cli(args, &err) == 1 && strstr(err, "--taper"), "taper: %s", err);
+    CHECK(run_cli(args, &err) == 2 && strstr(err, "--taper"), "taper: %s", err);
     snprintf(args, sizeof args, "ingest --airsas '%s' --background '%s/nowhere' -o '%s'", dir, test_tmpdir(), run_path);
     CHECK(run_cli(args, &err) == 1 && strstr(err, "background"), "missing background: %s", err);
     snprintf(args, sizeof args, "ingest --airsas '%s' -o '%s/no/such/dir/run.h5'", dir, test_tmpdir());

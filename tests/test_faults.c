@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -60,9 +61,10 @@ static sasnav_run *make_run(int n_pings, int n_rx, int n_samples, float value)
 
 static void interrupt_write(int sig)
 {
-    const char *dir = test_tmpdir();
-    char target[4096];
-    snprintf(target, sizeof target, "%s/out-%d.h5", dir, sig);
+    char dir[4096], target[4200];
+    snprintf(dir, sizeof dir, "%s/sig%d", test_tmpdir(), sig);
+    mkdir(dir, 0755);
+    snprintf(target, sizeof target, "%s/out.h5", dir);
     sasnav_run *before = make_run(2, 4, 64, 1.0f);
     CHECK(before && sasnav_run_write(target, before) == SASNAV_OK, "writing the earlier run: %s",
           sasnav_last_error());

@@ -558,11 +558,14 @@ static int tmp_create(h5_ctx *c)
         for (int k = 0; k < 6; k++, r /= 62) suffix[k] = letters[r % 62];
         suffix[6] = '\0';
         snprintf(tmp, n, "%s.tmp-%s", c->path, suffix);
+        sigset_t held;
+        sasnav_partial_hold(&held);
         int fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        if (fd >= 0) c->partial = sasnav_partial_add(tmp);
+        sasnav_partial_release(&held);
         if (fd >= 0) {
             close(fd);
             c->tmp_path = tmp;
-            c->partial = sasnav_partial_add(tmp);
             return SASNAV_OK;
         }
         if (errno != EEXIST) {

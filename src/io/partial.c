@@ -10,6 +10,8 @@
 #include "io/textfile.h"
 #include "sasnav/io.h"
 
+#include <pthread.h>
+#include <signal.h>
 #include <stdatomic.h>
 #include <string.h>
 #include <unistd.h>
@@ -46,3 +48,12 @@ void sasnav_remove_partial_outputs(void)
     for (int i = 0; i < PARTIAL_SLOTS; i++)
         if (atomic_load(&slot_state[i]) == SLOT_READY) unlink(slot_path[i]);
 }
+
+void sasnav_partial_hold(sigset_t *old)
+{
+    sigset_t all;
+    sigfillset(&all);
+    pthread_sigmask(SIG_BLOCK, &all, old);
+}
+
+void sasnav_partial_release(const sigset_t *old) { pthread_sigmask(SIG_SETMASK, old, NULL); }

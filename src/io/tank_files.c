@@ -34,12 +34,15 @@ static int write_wav(const char *path, const float *data, int n_ch, int n_frames
     info.samplerate = (int)lround(fs);
     info.channels = n_ch;
     info.format = SF_FORMAT_WAV | SF_FORMAT_FLOAT;
+    sigset_t held;
+    sasnav_partial_hold(&held);
     SNDFILE *f = sf_open(tmp, SFM_WRITE, &info);
+    int slot = f ? sasnav_partial_add(tmp) : -1;
+    sasnav_partial_release(&held);
     if (!f) {
         free(frames);
         return sasnav_set_error(SASNAV_ERR_IO, "cannot create %s: %s", tmp, sf_strerror(NULL));
     }
-    int slot = sasnav_partial_add(tmp);
     sf_count_t w = sf_writef_float(f, frames, n_frames);
     free(frames);
     int close_rc = sf_close(f);

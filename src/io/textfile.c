@@ -20,13 +20,16 @@ int sasnav_text_open(sasnav_text_out *out, const char *path)
     if (len < 0 || (size_t)len >= sizeof out->tmp || strlen(path) >= sizeof out->path)
         return sasnav_set_error(SASNAV_ERR_ARG, "%s: path too long", path);
     strcpy(out->path, path);
+    sigset_t held;
+    sasnav_partial_hold(&held);
     int fd = mkstemp(out->tmp);
+    if (fd >= 0) out->partial = sasnav_partial_add(out->tmp);
+    sasnav_partial_release(&held);
     if (fd < 0) {
         int e = errno;
         out->tmp[0] = '\0';
         return sasnav_set_error(SASNAV_ERR_IO, "%s: cannot create: %s", path, strerror(e));
     }
-    out->partial = sasnav_partial_add(out->tmp);
     (void)fchmod(fd, 0644);
     out->f = fdopen(fd, "w");
     if (!out->f) {

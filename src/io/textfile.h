@@ -6,6 +6,7 @@
 #ifndef SASNAV_TEXTFILE_H
 #define SASNAV_TEXTFILE_H
 
+#include <signal.h>
 #include <stdio.h>
 
 typedef struct {
@@ -32,6 +33,10 @@ void sasnav_text_abort(sasnav_text_out *out);
  * registered ones from a signal handler. */
 int sasnav_partial_add(const char *tmp_path);
 void sasnav_partial_remove(int slot);
+/* Signals held between creating a temporary file and registering it (so a
+ * handler never misses one): hold, create, add, release. */
+void sasnav_partial_hold(sigset_t *old);
+void sasnav_partial_release(const sigset_t *old);
 
 /* Reads the whole regular file `path` (at most max_bytes bytes) into a
  * NUL-terminated buffer (*text, to free(); *len bytes, may be NULL).
