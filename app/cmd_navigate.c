@@ -341,9 +341,8 @@ int cmd_navigate(int argc, char **argv)
     const char *input = argv[optind];
     no.pair.k = (int)k;
     no.pair.i = (int)iters;
-    /* The coarse stages never use more iterations than the final one. */
-    if (no.pair.coarse_k > no.pair.k) no.pair.coarse_k = no.pair.k;
-    if (no.pair.coarse_i > no.pair.i) no.pair.coarse_i = no.pair.i;
+    if (sasnav_pair_opts_check(&no.pair))
+        return cli_usage("navigate", "%s", sasnav_last_error());
     no.nthreads = (int)threads;
     if (isatty(STDERR_FILENO)) no.progress = progress_bar;
 

@@ -166,6 +166,11 @@ int cmd_pair(int argc, char **argv)
     po.fix_yaw = fix_yaw;
     if (cross_extent > 0) po.cross_extent = cross_extent;
     if (range_extent > 0) po.range_extent = range_extent;
+    if (sasnav_pair_opts_check(&po)) {
+        sasnav_run_free(run);
+        free(out);
+        return cli_usage("pair", "%s", sasnav_last_error());
+    }
     double extent = po.range_extent;
     int failed = 0;
     for (int s = 0; s < nsub; s++) {

@@ -376,8 +376,8 @@ int cmd_validate(int argc, char **argv)
     }
     if (optind != argc - 1) return cli_usage("validate", "exactly one input run file is required");
     if (!output) return cli_usage("validate", "an output directory is required (-o DIR)");
-    if (vo.nav.pair.fix_yaw && vo.nav.pair.yaw_sigma > 0)
-        return cli_usage("validate", "--fix-yaw and --yaw-sigma exclude each other");
+    if (sasnav_pair_opts_check(&vo.nav.pair))
+        return cli_usage("validate", "%s", sasnav_last_error());
     const char *input = argv[optind];
     vo.k_min = (int)kmin;
     vo.k_max = (int)kmax;

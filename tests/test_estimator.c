@@ -339,8 +339,44 @@ static void check_lags(void)
     sasnav_run_free(run);
 }
 
+/* Option rules in the library (they were the CLI's alone): each bad option
+ * or combination refused with SASNAV_ERR_ARG and a message naming it; the
+ * defaults pass; coarse iterations above the final ones are lowered. */
+static void check_opts_rules(void)
+{
+    sasnav_pair_opts o;
+    sasnav_pair_default_opts(&o);
+    CHECK(sasnav_pair_opts_check(&o) == SASNAV_OK, "defaults refused: %s", sasnav_last_error());
+    static const char *const says[] = {"fix_yaw and yaw_sigma", "k = 0", "surge_sigma", "tx_lag"};
+    for (int c = 0; c < 4; c++) {
+        sasnav_pair_default_opts(&o);
+        if (c == 0) { o.fix_yaw = 1; o.yaw_sigma = 1e-3; }
+        if (c == 1) o.k = 0;
+        if (c == 2) o.surge_sigma = NAN;
+        if (c == 3) o.tx_lag = -0.1;
+        CHECK(sasnav_pair_opts_check(&o) == SASNAV_ERR_ARG && strstr(sasnav_last_error(), says[c]),
+              "case %d should be refused naming '%s': %s", c, says[c], sasnav_last_error());
+    }
+    /* coarse_k = 5 > k = 3: created, with coarse_k lowered to 3 */
+    sasnav_system sys;
+    sasnav_system_default(&sys);
+    sasnav_array a;
+    sasnav_array_uniform(&a, 8, 0.05, 0.05, 0.05);
+    sasnav_window w;
+    sasnav_window_for_ranges(&sys, 9.0, 11.0, 8, &w);
+    sasnav_pair_default_opts(&o);
+    o.k = 3;
+    o.coarse_k = 5;
+    sasnav_pair *pr = NULL;
+    CHECK(sasnav_pair_create(&sys, &a, &w, &o, &pr) == SASNAV_OK, "create: %s", sasnav_last_error());
+    if (pr) CHECK(sasnav_pair_options(pr)->coarse_k == 3, "coarse_k %d, expected 3",
+                  sasnav_pair_options(pr)->coarse_k);
+    sasnav_pair_destroy(pr);
+}
+
 int main(void)
 {
+    check_opts_rules();
     check_lags();
     check_verdict();
     check_fixed_yaw();

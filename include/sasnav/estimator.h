@@ -194,6 +194,13 @@ typedef struct {
 
 typedef struct sasnav_pair sasnav_pair;
 
+/* Checks estimator options: ranges of every field and the rules between
+ * them (fix_yaw excludes yaw_sigma > 0). SASNAV_ERR_ARG with a message
+ * naming the option. sasnav_pair_create calls it, then lowers coarse_k and
+ * coarse_i to k and i when they exceed them (the coarse stages never
+ * iterate more than the final one). */
+int sasnav_pair_opts_check(const sasnav_pair_opts *opts);
+
 /* Creates an estimator for pings with the given system, array and window.
  * The grid is built in p's centroid frame around (nominal.x / 2, range). */
 int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,

@@ -212,6 +212,35 @@ static int level_make_ops(sasnav_pair *pr, pair_level *lv, double xcentre, pair_
     return level_rho_p(pr, lv);
 }
 
+int sasnav_pair_opts_check(const sasnav_pair_opts *o)
+{
+#define OPT_FAIL(...) return sasnav_set_error(SASNAV_ERR_ARG, "estimator options: " __VA_ARGS__)
+    if (!o) OPT_FAIL("NULL");
+    if (o->k < 1 || o->i < 1) OPT_FAIL("k = %d and i = %d must be >= 1", o->k, o->i);
+    if (o->coarse_k < 1 || o->coarse_i < 1)
+        OPT_FAIL("coarse_k = %d and coarse_i = %d must be >= 1", o->coarse_k, o->coarse_i);
+    if (!(o->range > 0) || !isfinite(o->range)) OPT_FAIL("range %g m must be > 0", o->range);
+    if (!(o->range_extent > 0) || !isfinite(o->range_extent))
+        OPT_FAIL("range_extent %g m must be > 0", o->range_extent);
+    if (!(o->cross_extent >= 0) || !isfinite(o->cross_extent))
+        OPT_FAIL("cross_extent %g m must be >= 0", o->cross_extent);
+    if (!(o->tx_lag >= 0) || !isfinite(o->tx_lag)) OPT_FAIL("tx_lag %g m must be >= 0", o->tx_lag);
+    if (!(o->blur >= 0) || !isfinite(o->blur)) OPT_FAIL("blur %g must be >= 0", o->blur);
+    if (!(o->yaw_sigma >= 0) || !isfinite(o->yaw_sigma))
+        OPT_FAIL("yaw_sigma %g rad must be finite and >= 0", o->yaw_sigma);
+    if (!(o->surge_sigma >= 0) || !isfinite(o->surge_sigma))
+        OPT_FAIL("surge_sigma %g m must be finite and >= 0", o->surge_sigma);
+    if (o->fix_yaw && o->yaw_sigma > 0)
+        OPT_FAIL("fix_yaw and yaw_sigma > 0 exclude each other (a held yaw has no prior)");
+    if (!(o->box.x >= 0 && o->box.y >= 0 && o->box.theta >= 0))
+        OPT_FAIL("the search box half-widths must be >= 0");
+    if (!(o->verdict_eta_max > 0)) OPT_FAIL("verdict_eta_max %g must be > 0", o->verdict_eta_max);
+    if (!(o->verdict_margin_min >= 1) || !isfinite(o->verdict_margin_min))
+        OPT_FAIL("verdict_margin_min %g must be finite and >= 1", o->verdict_margin_min);
+#undef OPT_FAIL
+    return SASNAV_OK;
+}
+
 int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
                        const sasnav_window *win, const sasnav_pair_opts *opts,
                        sasnav_pair **out)
@@ -230,17 +259,14 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
     if (opts) pr->opts = *opts;
     else sasnav_pair_default_opts(&pr->opts);
     sasnav_pair_opts *o = &pr->opts;
-    if (o->k < 1 || o->i < 1 || o->coarse_k < 1 || o->coarse_i < 1 || !(o->range > 0) ||
-        !(o->range_extent > 0) || !(o->cross_extent >= 0) || !(o->tx_lag >= 0) ||
-        !isfinite(o->range + o->range_extent + o->cross_extent + o->tx_lag + o->blur) ||
-        !(o->blur >= 0) || !(o->yaw_sigma >= 0) || !isfinite(o->yaw_sigma) ||
-        !(o->surge_sigma >= 0) || !isfinite(o->surge_sigma) ||
-        !(o->box.x >= 0 && o->box.y >= 0 && o->box.theta >= 0) ||
-        !(o->verdict_eta_max > 0) || !(o->verdict_margin_min >= 1) ||
-        !isfinite(o->verdict_margin_min)) {
+    rc = sasnav_pair_opts_check(o);
+    if (rc) {
         free(pr);
-        return sasnav_set_error(SASNAV_ERR_ARG, "invalid estimator options");
+        return rc;
     }
+    /* The coarse stages never use more iterations than the final one. */
+    if (o->coarse_k > o->k) o->coarse_k = o->k;
+    if (o->coarse_i > o->i) o->coarse_i = o->i;
     if (!(o->pixel > 0)) {
         o->pixel = sys->sound_speed / (4.0 * sys->bandwidth);
         if (array->rx_length > 0 && array->rx_length / 4.0 < o->pixel) o->pixel = array->rx_length / 4.0;
