@@ -171,38 +171,31 @@ int cmd_pair(int argc, char **argv)
         free(out);
         return cli_usage("pair", "%s", sasnav_last_error());
     }
-    double extent = po.range_extent;
+    po.range = range;
+    po.tx_lag = run->tx_lag;
+    sasnav_pair_interval *iv = calloc((size_t)nsub, sizeof *iv);
+    rc = iv ? sasnav_pair_estimate_intervals(run, (int)p, (int)q, &po, nsub, motion_lag, iv)
+            : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    if (rc) {
+        sasnav_run_free(run);
+        free(out);
+        free(iv);
+        return rc == SASNAV_ERR_ARG ? cli_fail("pair", rc, "%s", input) : cli_fail("pair", rc, "estimate");
+    }
     int failed = 0;
     for (int s = 0; s < nsub; s++) {
-        sasnav_pair_opts so = po;
-        so.range_extent = extent / nsub;
-        so.range = range - 0.5 * extent + (s + 0.5) * so.range_extent;
-        /* The Tx-array offset: the run's (fixed) one, or the distance the
-         * vehicle covers while the pulse reaches the sub-interval's centre
-         * and returns (--lag-model motion). */
-        so.tx_lag = run->tx_lag;
-        if (motion_lag) {
-            if (!(run->speed > 0)) {
-                sasnav_run_free(run);
-                free(out);
-                return cli_fail("pair", 0, "--lag-model motion needs the run's speed (0 in %s)", input);
-            }
-            so.tx_lag = sasnav_motion_tx_lag(run->speed, so.range, run->sys.sound_speed);
-        }
-        out[s].range = so.range;
-        out[s].tx_lag = so.tx_lag;
-        sasnav_pair *pair = NULL;
-        rc = sasnav_pair_create(&run->sys, &run->array, &run->win, &so, &pair);
-        if (!rc) rc = sasnav_pair_set_data(pair, sasnav_run_ping(run, (int)p), sasnav_run_ping(run, (int)q), nominal);
-        if (!rc) rc = sasnav_pair_estimate(pair, &out[s].res);
-        sasnav_pair_destroy(pair);
-        out[s].rc = rc;
-        if (rc) {
+        out[s].range = iv[s].range;
+        out[s].tx_lag = iv[s].tx_lag;
+        out[s].res = iv[s].result;
+        out[s].rc = iv[s].status;
+        if (iv[s].status) {
             failed = 1;
-            cli_fail("pair", rc, "pings %ld-%ld, range %.2f m", p, q, so.range);
+            cli_fail("pair", 0, "pings %ld-%ld, range %.2f m: %s", p, q, iv[s].range,
+                     sasnav_strerror(iv[s].status));
             if (!json) break;
         }
     }
+    free(iv);
     sasnav_run_free(run);
     if (failed && !json) {
         free(out);

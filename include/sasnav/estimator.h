@@ -33,6 +33,7 @@
 
 #include "sasnav/image.h"
 #include "sasnav/op.h"
+#include "sasnav/run.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -248,6 +249,29 @@ const sasnav_pair_opts *sasnav_pair_options(const sasnav_pair *pair);
 long sasnav_pair_applications(const sasnav_pair *pair);
 
 void sasnav_pair_destroy(sasnav_pair *pair);
+
+/* One range sub-interval of sasnav_pair_estimate_intervals. */
+typedef struct {
+    double range;                /* centre range of the sub-interval, m */
+    double tx_lag;               /* EPCA Tx-array offset used there, m */
+    int status;                  /* SASNAV_OK or the code that stopped it */
+    sasnav_pair_result result;   /* valid when status is SASNAV_OK */
+} sasnav_pair_interval;
+
+/* Estimates the motion error of ping q relative to ping p of `run` in n
+ * range sub-intervals that split [opts->range - opts->range_extent / 2,
+ * opts->range + opts->range_extent / 2] into equal parts (paper Sec. III-D:
+ * the Tx-array offset of the EPCA model grows with range). Each interval
+ * has its own estimator and Tx-array offset: run->tx_lag (motion_lag 0), or
+ * the distance the vehicle covers while the pulse reaches the interval's
+ * centre and returns, run->speed x 2 R / c (motion_lag 1; needs
+ * run->speed > 0). The nominal displacement comes from run->nav. Returns
+ * SASNAV_OK when every interval was attempted (each interval's own status
+ * in out[s].status), SASNAV_ERR_ARG for bad arguments (pings, n outside
+ * 1..64, options: sasnav_pair_opts_check). */
+int sasnav_pair_estimate_intervals(const sasnav_run *run, int p, int q,
+                                   const sasnav_pair_opts *opts, int n, int motion_lag,
+                                   sasnav_pair_interval *out);
 
 #ifdef __cplusplus
 }

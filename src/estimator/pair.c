@@ -684,3 +684,39 @@ const char *sasnav_verdict_name(int verdict)
     default: return "unknown";
     }
 }
+
+int sasnav_pair_estimate_intervals(const sasnav_run *run, int p, int q,
+                                   const sasnav_pair_opts *opts, int n, int motion_lag,
+                                   sasnav_pair_interval *out)
+{
+    if (!run || !opts || !out) return sasnav_set_error(SASNAV_ERR_ARG, "intervals: NULL argument");
+    if (p < 0 || q < 0 || p >= run->n_pings || q >= run->n_pings || p == q)
+        return sasnav_set_error(SASNAV_ERR_ARG, "intervals: pings %d, %d of a run of %d", p, q,
+                                run->n_pings);
+    if (n < 1 || n > 64) return sasnav_set_error(SASNAV_ERR_ARG, "intervals: n = %d, not 1..64", n);
+    int rc = sasnav_pair_opts_check(opts);
+    if (rc) return rc;
+    if (motion_lag && !(run->speed > 0))
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "intervals: the motion lag model needs the run's speed (it is 0)");
+    sasnav_pose nominal = sasnav_ping_displacement(&run->nav[p], &run->nav[q]);
+    double extent = opts->range_extent;
+    for (int s = 0; s < n; s++) {
+        sasnav_pair_opts so = *opts;
+        so.range_extent = extent / n;
+        so.range = opts->range - 0.5 * extent + (s + 0.5) * so.range_extent;
+        so.tx_lag = motion_lag ? sasnav_motion_tx_lag(run->speed, so.range, run->sys.sound_speed)
+                               : run->tx_lag;
+        memset(&out[s], 0, sizeof out[s]);
+        out[s].range = so.range;
+        out[s].tx_lag = so.tx_lag;
+        sasnav_pair *pair = NULL;
+        rc = sasnav_pair_create(&run->sys, &run->array, &run->win, &so, &pair);
+        if (!rc) rc = sasnav_pair_set_data(pair, sasnav_run_ping(run, p), sasnav_run_ping(run, q), nominal);
+        if (!rc) rc = sasnav_pair_estimate(pair, &out[s].result);
+        sasnav_pair_destroy(pair);
+        out[s].status = rc;
+        if (rc == SASNAV_ERR_NOMEM || rc == SASNAV_ERR_FFT || rc == SASNAV_ERR_INTERNAL) return rc;
+    }
+    return SASNAV_OK;
+}
