@@ -375,9 +375,12 @@ int cmd_navigate(int argc, char **argv)
         sasnav_navigation_free(&nav);
         return cli_fail("navigate", rc, "cannot write %s", output);
     }
+    int n_unchecked = 0;
     for (int j = 0; j < nav.n_pairs; j++) {
         const sasnav_navigate_pair *np = &nav.pairs[j];
-        if (flagged(np))
+        if (np->verdict == SASNAV_VERDICT_UNCHECKED && np->resolution == SASNAV_RESOLVED_NONE)
+            n_unchecked++; /* one line for them all, below */
+        else if (flagged(np))
             fprintf(stderr, "sasnav navigate: warning: pair %d-%d is %s (%s%s%s)\n", np->p, np->q,
                     np->resolution == SASNAV_RESOLVED_BRIDGED ? "bridged" : sasnav_verdict_name(np->verdict),
                     np->status != SASNAV_OK ? sasnav_strerror(np->status) : "estimate",
@@ -387,6 +390,11 @@ int cmd_navigate(int argc, char **argv)
             fprintf(stderr, "sasnav navigate: pair %d-%d: first %s, %s over the run, now ok\n", np->p,
                     np->q, sasnav_verdict_name(np->first_verdict), sasnav_resolution_name(np->resolution));
     }
+    if (n_unchecked > 0)
+        fprintf(stderr,
+                "sasnav navigate: warning: %d of %d pairs are unchecked: DPCA has no verdict of its own "
+                "(a slip of one phase-centre spacing goes unseen)%s\n",
+                n_unchecked, nav.n_pairs, nav.aiding_used ? "" : "; aiding measurements would confirm them");
     if (nav.n_skipped > 0)
         fprintf(stderr, "sasnav navigate: %d long baselines skipped (< 2 phase centres overlap)\n",
                 nav.n_skipped);

@@ -47,11 +47,14 @@ static int pose_close(sasnav_pose a, sasnav_pose b, double tol)
 
 /* paper-trajectory reduced to n pings facing the disc, noise-free, exact
  * EPCA geometry (true_bistatic 0) and small smooth errors. */
+static int g_aiding; /* 1: the next simulate() writes aiding measurements */
+
 static sasnav_run *simulate(int n, double spacing, double surge_rms, double sway_rms,
                             double yaw_rms)
 {
     sasnav_scenario sc;
     if (sasnav_scenario_preset("paper-trajectory", &sc)) return NULL;
+    sc.aiding.enabled = g_aiding;
     sc.traj.n_pings = n;
     sc.traj.ping_spacing = spacing;
     sc.traj.x_start = -0.5 * (n - 1) * spacing;
@@ -196,8 +199,47 @@ static void test_dpca(void)
         for (int i = 0; i < nav.n_pings; i++)
             CHECK(fabs(nav.cumulative[i].y) <= DPCA_SWAY_TOL, "DPCA ping %d sway error %.4f mm", i,
                   1e3 * nav.cumulative[i].y);
+        /* DPCA has no verdict: even right estimates are never "ok" alone. */
+        for (int j = 0; j < nav.n_pairs; j++)
+            CHECK(nav.pairs[j].verdict == SASNAV_VERDICT_UNCHECKED &&
+                      nav.pairs[j].first_verdict == SASNAV_VERDICT_UNCHECKED,
+                  "DPCA pair %d verdict %s", j, sasnav_verdict_name(nav.pairs[j].verdict));
+        CHECK(nav.n_flagged == nav.n_pairs, "%d of %d DPCA pairs flagged", nav.n_flagged, nav.n_pairs);
     }
     sasnav_navigation_free(&nav);
+    sasnav_run_free(run);
+
+    /* With aiding: estimates that agree with it are confirmed ("ok"); one
+     * moved by a phase-centre spacing of surge (what DPCA cannot see) is
+     * not, and is bridged. */
+    g_aiding = 1;
+    run = simulate(6, 0.20, 0.0, 3e-3, 3e-3);
+    g_aiding = 0;
+    if (!run) return;
+    CHECK(run->aiding != NULL, "no aiding simulated");
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    if (nav.n_pings == run->n_pings) {
+        CHECK(nav.aiding_used == 1 && nav.n_flagged == 0, "DPCA with aiding: %d flagged, aiding used %d",
+              nav.n_flagged, nav.aiding_used);
+        for (int j = 0; j < nav.n_pairs; j++)
+            CHECK(nav.pairs[j].verdict == SASNAV_VERDICT_OK, "aided DPCA pair %d verdict %s", j,
+                  sasnav_verdict_name(nav.pairs[j].verdict));
+    }
+    sasnav_navigation_free(&nav);
+    /* The DVL of interval 2-3 now says the vehicle went one phase-centre
+     * spacing (2.5 cm) further than the DPCA estimate (surge error 0). */
+    double dt = run->aiding->time[3] - run->aiding->time[2];
+    run->aiding->velocity[2 * 3] += 0.025 / dt;
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    if (nav.n_pings == run->n_pings) {
+        CHECK(nav.pairs[2].resolution == SASNAV_RESOLVED_BRIDGED && nav.n_flagged == 1,
+              "DPCA pair 2-3 against its aiding: %s, %d flagged",
+              sasnav_resolution_name(nav.pairs[2].resolution), nav.n_flagged);
+    }
+    sasnav_navigation_free(&nav);
+    sasnav_run_free(run);
+    run = simulate(6, 0.20, 0.0, 3e-3, 3e-3);
+    if (!run) return;
 
     /* 20 cm spacing: (p, p + 2) shares no phase centre and is skipped. */
     o.long_baselines = 1;

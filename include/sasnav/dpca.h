@@ -104,7 +104,9 @@ typedef struct {
  * zeta_stage = global_stage = error, zeta = eta = 0, overlap = mean
  * coherence, evaluations = applications = 0, seconds = wall time, status =
  * SASNAV_OK or SASNAV_ERR_NO_OVERLAP (mean coherence below
- * opts.min_coherence). `opts` may be NULL (defaults); `detail` may be NULL.
+ * opts.min_coherence), verdict = SASNAV_VERDICT_UNCHECKED (DPCA cannot tell
+ * a right estimate from one slipped by a phase-centre spacing: its surge
+ * is not observed at all, estimator.h), or SASNAV_VERDICT_NO_OVERLAP. `opts` may be NULL (defaults); `detail` may be NULL.
  * Returns SASNAV_OK, or SASNAV_ERR_ARG (bad run, ping indices or options, a
  * non-uniform array, a nominal shift that is not a whole number of phase
  * centres within 1e-6, fewer than 2 overlapping phase centres, a range

@@ -125,15 +125,27 @@ void sasnav_pair_default_opts(sasnav_pair_opts *opts);
  *               run's motion model, aiding sensors: sasnav_navigate);
  *   FAILED      no candidate explains the data (eta above its bound), or a
  *               stage did not converge: the estimate is probably wrong;
- *   NO_OVERLAP  the pings share (almost) no observed scene. */
+ *   NO_OVERLAP  the pings share (almost) no observed scene;
+ *   UNCHECKED   the method has no criteria of its own (the DPCA baseline,
+ *               dpca.h): the estimate may be wrong, e.g. by one
+ *               phase-centre spacing of surge, without any sign; only
+ *               the aiding can confirm it (sasnav_navigate).
+ * From least to most grave: ok, unchecked, ambiguous, failed, no_overlap
+ * (sasnav_verdict_rank). */
 typedef enum {
     SASNAV_VERDICT_OK = 0,
     SASNAV_VERDICT_AMBIGUOUS = 1,
     SASNAV_VERDICT_FAILED = 2,
-    SASNAV_VERDICT_NO_OVERLAP = 3
+    SASNAV_VERDICT_NO_OVERLAP = 3,
+    SASNAV_VERDICT_UNCHECKED = 4
 } sasnav_verdict;
 
-/* "ok", "ambiguous", "failed", "no_overlap" ("unknown" otherwise). */
+/* Gravity of a verdict: 0 ok, 1 unchecked, 2 ambiguous, 3 failed,
+ * 4 no_overlap (5 for an unknown value). */
+int sasnav_verdict_rank(int verdict);
+
+/* "ok", "ambiguous", "failed", "no_overlap", "unchecked" ("unknown"
+ * otherwise). */
 const char *sasnav_verdict_name(int verdict);
 
 /* Candidates: the local minima of the global stage's valley scan (lowest

@@ -414,6 +414,8 @@ int sasnav_dpca_estimate(const sasnav_run *run, int p, int q, const sasnav_dpca_
     res->zeta_stage = err;
     res->overlap = mean_coh;
     res->status = mean_coh < o.min_coherence ? SASNAV_ERR_NO_OVERLAP : SASNAV_OK;
+    res->verdict = res->status == SASNAV_OK ? SASNAV_VERDICT_UNCHECKED : SASNAV_VERDICT_NO_OVERLAP;
+    res->margin = INFINITY;
     res->seconds = omp_get_wtime() - t_start;
     if (detail) *detail = *det;
     free(det);

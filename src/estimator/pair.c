@@ -681,7 +681,20 @@ const char *sasnav_verdict_name(int verdict)
     case SASNAV_VERDICT_AMBIGUOUS: return "ambiguous";
     case SASNAV_VERDICT_FAILED: return "failed";
     case SASNAV_VERDICT_NO_OVERLAP: return "no_overlap";
+    case SASNAV_VERDICT_UNCHECKED: return "unchecked";
     default: return "unknown";
+    }
+}
+
+int sasnav_verdict_rank(int verdict)
+{
+    switch (verdict) {
+    case SASNAV_VERDICT_OK: return 0;
+    case SASNAV_VERDICT_UNCHECKED: return 1;
+    case SASNAV_VERDICT_AMBIGUOUS: return 2;
+    case SASNAV_VERDICT_FAILED: return 3;
+    case SASNAV_VERDICT_NO_OVERLAP: return 4;
+    default: return 5;
     }
 }
 

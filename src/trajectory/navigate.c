@@ -389,8 +389,16 @@ static int reestimate(nav_ctx *ctx, sasnav_navigate_pair *np, sasnav_pose start,
     return SASNAV_OK;
 }
 
-/* The graver of two verdicts (ok < ambiguous < failed < no_overlap). */
-static int worse(int a, int b) { return a > b ? a : b; }
+/* The graver of two verdicts (sasnav_verdict_rank). */
+static int worse(int a, int b) { return sasnav_verdict_rank(a) >= sasnav_verdict_rank(b) ? a : b; }
+
+/* An estimate the motion model may lean on: ok, or a method's without
+ * verdict (DPCA) that nothing contradicts. */
+static int leanable(const sasnav_navigate_pair *np)
+{
+    return (np->verdict == SASNAV_VERDICT_OK || np->verdict == SASNAV_VERDICT_UNCHECKED) &&
+           np->resolution != SASNAV_RESOLVED_BRIDGED;
+}
 
 /* Standard deviations of a pair's estimate in the smoother. */
 static sasnav_pose estimate_sigma(const nav_ctx *ctx, const sasnav_navigate_pair *np)
@@ -414,9 +422,9 @@ static sasnav_pose motion_prediction(const sasnav_navigation *out, int n, int j)
 {
     int lo = -1, hi = -1;
     for (int i = j - 1; i >= 0 && lo < 0; i--)
-        if (out->pairs[i].verdict == SASNAV_VERDICT_OK && out->pairs[i].resolution != SASNAV_RESOLVED_BRIDGED) lo = i;
+        if (leanable(&out->pairs[i])) lo = i;
     for (int i = j + 1; i < n && hi < 0; i++)
-        if (out->pairs[i].verdict == SASNAV_VERDICT_OK && out->pairs[i].resolution != SASNAV_RESOLVED_BRIDGED) hi = i;
+        if (leanable(&out->pairs[i])) hi = i;
     if (lo < 0 && hi < 0) return out->pairs[j].result.error;
     if (lo < 0) return out->pairs[hi].result.error;
     if (hi < 0) return out->pairs[lo].result.error;
@@ -513,8 +521,10 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
                        np->verdict != SASNAV_VERDICT_NO_OVERLAP;
         int agree = agrees(ctx, np->result.error, a[j], sa[j]);
         if (ok_alone && agree) {
-            if (with_aiding && np->verdict == SASNAV_VERDICT_AMBIGUOUS && isfinite(sa[j].x + sa[j].theta))
-                np->verdict = SASNAV_VERDICT_OK; /* the aiding settles the ambiguity */
+            if (with_aiding && (np->verdict == SASNAV_VERDICT_AMBIGUOUS || np->verdict == SASNAV_VERDICT_UNCHECKED) &&
+                isfinite(sa[j].x + sa[j].theta))
+                np->verdict = SASNAV_VERDICT_OK; /* the aiding settles the ambiguity, or
+                                                    confirms an estimate without verdict */
             continue;
         }
         if (np->status == SASNAV_ERR_NO_OVERLAP && !with_aiding) continue;

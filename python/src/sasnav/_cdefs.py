@@ -439,6 +439,7 @@ CONSTANTS = {
     "SASNAV_VERDICT_AMBIGUOUS": 1,
     "SASNAV_VERDICT_FAILED": 2,
     "SASNAV_VERDICT_NO_OVERLAP": 3,
+    "SASNAV_VERDICT_UNCHECKED": 4,
 }
 
 # Headers the layout test includes (all but sasnav.h, which needs the
@@ -507,6 +508,7 @@ PROTOTYPES = {
     # estimator.h
     "sasnav_pair_default_opts": (_v, [_P(PairOpts)]),
     "sasnav_verdict_name": (c_char_p, [_i]),
+    "sasnav_verdict_rank": (_i, [_i]),
     "sasnav_pair_create": (_i, [_P(SystemC), _P(SensorArrayC), _P(Window), _P(PairOpts),
                                 _P(c_void_p)]),
     "sasnav_pair_set_data": (_i, [c_void_p, cfloat_p, cfloat_p, Pose]),

@@ -795,7 +795,7 @@ class PairEstimate:
     error, displacement, nominal, global_stage, zeta_stage: Pose;
     truth: the true motion error when the run holds the truth (else None);
     zeta, eta: the error functions at the estimate; verdict: "ok",
-    "ambiguous", "failed" or "no_overlap"; margin (inf: no other
+    "ambiguous", "failed", "no_overlap" or (DPCA) "unchecked"; margin (inf: no other
     candidate); candidates: list of Candidate; status: "ok" or the
     estimator's status text; result: the C struct (every field)."""
 
