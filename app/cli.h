@@ -2,8 +2,10 @@
 #ifndef SASNAV_CLI_H
 #define SASNAV_CLI_H
 
+#include "sasnav/checkpoint.h"
 #include "sasnav/error.h"
 #include "sasnav/image.h"
+#include "sasnav/navigate.h"
 
 #include <getopt.h>
 
@@ -52,6 +54,30 @@ int cli_parse_grid(const char *text, sasnav_grid *grid);
 /* SIGINT / SIGTERM / SIGHUP remove partial outputs, then end the process;
  * SIGXFSZ is ignored (app/signals.c). */
 void cli_install_signal_handlers(void);
+
+/* --checkpoint FILE of the pair-estimating commands (navigate, validate):
+ * the records in FILE are given to the navigation as opts->done, every
+ * pair estimated is appended, and FILE is removed once the output is
+ * written (app/cli_checkpoint.c; checkpoint.h). */
+typedef struct {
+    sasnav_checkpoint *ck;
+    sasnav_pair_record *records; /* read from FILE (n_records) */
+    int n_records;
+    int n_resumed, n_appended;   /* pairs taken from FILE / written to it */
+    int write_failed;
+    const char *command, *path;
+    sasnav_progress_fn inner;    /* the wrapped progress callback */
+    void *inner_user;
+} cli_checkpoint;
+
+/* Opens `path` (NULL: no checkpoint, nothing else done) for `command`;
+ * wraps no->progress and sets no->done / no->n_done. Returns 0, or 1
+ * after printing the error. */
+int cli_checkpoint_begin(cli_checkpoint *c, const char *command, const char *path,
+                         sasnav_navigate_opts *no);
+/* After the job: with success (the output written), removes the file;
+ * otherwise keeps it and says how to resume. Reports the resumed pairs. */
+void cli_checkpoint_end(cli_checkpoint *c, int success);
 
 int cmd_simulate(int argc, char **argv);
 int cmd_image(int argc, char **argv);

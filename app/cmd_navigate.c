@@ -18,7 +18,7 @@ static const char *help =
     "                       [--cross-extent M] [--range-extent M]\n"
     "                       [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]\n"
     "                       [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]\n"
-    "                       [--threads N] [--json]\n"
+    "                       [--threads N] [--json] [--checkpoint FILE]\n"
     "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
     "\n"
     "Estimates the displacement of every consecutive ping pair, composes them\n"
@@ -77,6 +77,10 @@ static const char *help =
     "                    the written navigation then images on the truth's grid)\n"
     "  --threads N       OpenMP threads (default: all cores); with several, pairs\n"
     "                    are estimated concurrently (same results, bit for bit)\n"
+    "  --checkpoint FILE  keep every pair estimate in FILE as it is made; if the\n"
+    "                    command is interrupted (Ctrl-C, kill, a crash), the same\n"
+    "                    command resumes from FILE and gives the same result\n"
+    "                    (docs/cli.md). FILE is removed once -o is written\n"
     "  --json            machine-readable summary on stdout\n"
     "  -o FILE           output navigation file (HDF5)\n"
     "\n"
@@ -255,11 +259,12 @@ int cmd_navigate(int argc, char **argv)
         {"range-extent", required_argument, 0, 'E'}, {"no-aiding", no_argument, 0, 'N'},
         {"no-resolve", no_argument, 0, 'R'}, {"motion-sigma", required_argument, 0, 'M'},
         {"speed-lags", required_argument, 0, 'S'}, {"aiding-bias", required_argument, 0, 'B'},
+        {"checkpoint", required_argument, 0, 'C'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
     sasnav_navigate_default_opts(&no);
-    const char *output = NULL;
+    const char *output = NULL, *checkpoint = NULL;
     long threads = 0, k = no.pair.k, iters = no.pair.i;
     int json = 0, opt, anchor_truth = 0, have_first = 0;
     double first[3] = {0, 0, 0};
@@ -329,6 +334,7 @@ int cmd_navigate(int argc, char **argv)
             break;
         }
         case 'j': json = 1; break;
+        case 'C': checkpoint = optarg; break;
         case 'o': output = optarg; break;
         case 'h': fputs(help, stdout); return 0;
         default: return cli_bad_option("navigate", argv, longopts);
@@ -353,11 +359,18 @@ int cmd_navigate(int argc, char **argv)
         sasnav_run_free(run);
         return cli_fail("navigate", 0, "--anchor-truth: %s holds no ground truth", input);
     }
+    cli_checkpoint ck;
+    if (cli_checkpoint_begin(&ck, "navigate", checkpoint, &no)) {
+        sasnav_run_free(run);
+        return CLI_FAILURE;
+    }
     sasnav_navigation nav;
     rc = sasnav_navigate(run, &no, &nav);
     if (rc) {
         sasnav_run_free(run);
-        return cli_fail("navigate", rc, "navigation of %s failed", input);
+        rc = cli_fail("navigate", rc, "navigation of %s failed", input);
+        cli_checkpoint_end(&ck, 0);
+        return rc;
     }
     const sasnav_ping_pose *written = anchor_truth ? nav.anchored : nav.nav;
     if (have_first) {
@@ -373,8 +386,11 @@ int cmd_navigate(int argc, char **argv)
     sasnav_run_free(run);
     if (rc) {
         sasnav_navigation_free(&nav);
-        return cli_fail("navigate", rc, "cannot write %s", output);
+        rc = cli_fail("navigate", rc, "cannot write %s", output);
+        cli_checkpoint_end(&ck, 0);
+        return rc;
     }
+    cli_checkpoint_end(&ck, 1);
     int n_unchecked = 0;
     for (int j = 0; j < nav.n_pairs; j++) {
         const sasnav_navigate_pair *np = &nav.pairs[j];

@@ -21,6 +21,7 @@ static const char *help =
     "                       [--fix-yaw | --yaw-sigma S] [--surge-sigma S] [--long-baselines]\n"
     "                       [--k K] [--i I] [--refine [--sweeps N] [--sparsity EPS]]\n"
     "                       [--grid X0,X1,NX,Y0,Y1,NY] [--threads N] [--json]\n"
+    "                       [--checkpoint FILE]\n"
     "\n"
     "The validation method of the paper's tank experiment (Sec. V): from a run\n"
     "whose pings step by whole phase-centre spacings (the tank: K = 7 of 8\n"
@@ -64,6 +65,11 @@ static const char *help =
     "                     interest +-0.35 m, 5 mm pixels)\n"
     "  --threads N        OpenMP threads (default: all cores)\n"
     "  --json             print the summary on stdout\n"
+    "  --checkpoint FILE  keep every pair estimate in FILE as it is made; an\n"
+    "                     interrupted validation run again with the same\n"
+    "                     command resumes from FILE (the same results; the\n"
+    "                     refinement and the images are redone). FILE is\n"
+    "                     removed once the outputs are written\n"
     "\n"
     "On a terminal, a status line on stderr counts the estimated pairs.\n";
 
@@ -332,10 +338,11 @@ int cmd_validate(int argc, char **argv)
         {"json", no_argument, 0, 'j'},        {"output", required_argument, 0, 'o'},
         {"refine", no_argument, 0, 'R'},   {"sweeps", required_argument, 0, 's'},
         {"sparsity", required_argument, 0, 'e'}, {"help", no_argument, 0, 'h'},
+        {"checkpoint", required_argument, 0, 'C'},
         {0, 0, 0, 0}};
     sasnav_validate_opts vo;
     sasnav_validate_default_opts(&vo);
-    const char *output = NULL;
+    const char *output = NULL, *checkpoint = NULL;
     long kmin = vo.k_min, kmax = 0, k = vo.nav.pair.k, iters = vo.nav.pair.i, threads = 0,
          sweeps = vo.refine_opts.sweeps;
     int json = 0, opt;
@@ -370,6 +377,7 @@ int cmd_validate(int argc, char **argv)
                 return cli_usage("validate", "--sparsity needs a number in [0, 1e6]");
             break;
         case 'o': output = optarg; break;
+        case 'C': checkpoint = optarg; break;
         case 'h': fputs(help, stdout); return 0;
         default: return cli_bad_option("validate", argv, longopts);
         }
@@ -398,14 +406,26 @@ int cmd_validate(int argc, char **argv)
     sasnav_run *run = NULL;
     int rc = sasnav_run_read(input, &run);
     if (rc) return cli_fail("validate", rc, "cannot read %s", input);
+    int bar = vo.nav.progress != NULL;
+    cli_checkpoint ck;
+    if (cli_checkpoint_begin(&ck, "validate", checkpoint, &vo.nav)) {
+        sasnav_run_free(run);
+        return CLI_FAILURE;
+    }
     sasnav_validation v;
     rc = sasnav_validate(run, &vo, &v);
     sasnav_run_free(run);
-    if (vo.nav.progress) fputc('\n', stderr);
-    if (rc) return cli_fail("validate", rc, "validation of %s failed", input);
+    if (bar) fputc('\n', stderr);
+    if (rc) {
+        rc = cli_fail("validate", rc, "validation of %s failed", input);
+        cli_checkpoint_end(&ck, 0);
+        return rc;
+    }
     if (mkdir(output, 0777) && errno != EEXIST) {
         sasnav_validation_free(&v);
-        return cli_fail("validate", 0, "cannot create %s: %s", output, strerror(errno));
+        rc = cli_fail("validate", 0, "cannot create %s: %s", output, strerror(errno));
+        cli_checkpoint_end(&ck, 0);
+        return rc;
     }
     json_t *root = summary(input, &v, vo.refine);
     char *text = json_dumps(root, JSON_INDENT(2) | JSON_REAL_PRECISION(10));
@@ -422,8 +442,11 @@ int cmd_validate(int argc, char **argv)
     if (rc) {
         free(text);
         sasnav_validation_free(&v);
-        return cli_fail("validate", rc, "cannot write the outputs in %s", output);
+        rc = cli_fail("validate", rc, "cannot write the outputs in %s", output);
+        cli_checkpoint_end(&ck, 0);
+        return rc;
     }
+    cli_checkpoint_end(&ck, 1);
     if (json) puts(text);
     else {
         printf("K trajectories: spread %.3f mm along track (ping %d, K = %d vs %d), %.3f mm across (ping %d)\n",

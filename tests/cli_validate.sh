@@ -27,7 +27,8 @@ done
 i=14
 while [ "$i" -lt 32 ]; do rm -f "$T/rec/ping_0$(printf %02d "$i").wav"; i=$((i + 1)); done
 "$CLI" ingest --wav "$T/rec" -o "$T/tank.h5" 2> "$T/ing.err" || { cat "$T/ing.err" >&2; fail "ingest --wav"; exit 1; }
-if "$CLI" validate "$T/tank.h5" --fix-yaw --surge-sigma 0.025 --k-min 7 --k 2 --i 1 --json -o "$T/val" > "$T/val.json" 2> "$T/val.err"; then
+if "$CLI" validate "$T/tank.h5" --fix-yaw --surge-sigma 0.025 --k-min 7 --k 2 --i 1 --json --checkpoint "$T/ck" -o "$T/val" > "$T/val.json" 2> "$T/val.err"; then
+    [ -e "$T/ck" ] && fail "validate's checkpoint not removed after success"
     for key in surge_jump_error yaw_error sway_spread surge_spread surge_spread_ping surge_spread_k sway_spread_ping min_image_correlation; do
         grep -q "\"$key\"" "$T/val.json" || fail "JSON lacks \"$key\""
     done

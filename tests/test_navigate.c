@@ -365,6 +365,117 @@ static void test_threads_over_pairs(void)
     sasnav_run_free(run);
 }
 
+/* Resuming (opts.done, the checkpoints' mechanism): records collected
+ * through the progress callback of a first navigation, given back whole or
+ * in part, give the same bits as estimating; records made with other
+ * options or of other pings are not used. Also through sasnav_validate's
+ * sub-runs: keys name the pings' content, not their index. */
+typedef struct {
+    sasnav_pair_record rec[32];
+    int n, resumed;
+} record_log;
+
+static void collect(const sasnav_navigate_progress *pr, void *user)
+{
+    record_log *l = user;
+    if (!pr->result) return;
+    if (pr->resumed) {
+        l->resumed++;
+        return;
+    }
+    if (l->n < 32) l->rec[l->n++] = (sasnav_pair_record){pr->key, pr->p, pr->q, pr->status, *pr->result};
+}
+
+static int same_navigation(const sasnav_navigation *a, const sasnav_navigation *b)
+{
+    if (a->n_pairs != b->n_pairs || a->n_pings != b->n_pings) return 0;
+    for (int j = 0; j < a->n_pairs; j++) {
+        const sasnav_navigate_pair *x = &a->pairs[j], *y = &b->pairs[j];
+        if (memcmp(&x->fused, &y->fused, sizeof x->fused) || memcmp(&x->result.error, &y->result.error, sizeof x->result.error) ||
+            x->result.eta != y->result.eta || x->verdict != y->verdict || x->resolution != y->resolution ||
+            x->first_status != y->first_status || x->result.n_candidates != y->result.n_candidates)
+            return 0;
+    }
+    return !memcmp(a->nav, b->nav, sizeof *a->nav * (size_t)a->n_pings) &&
+           !memcmp(a->centroids, b->centroids, sizeof *a->centroids * (size_t)a->n_pings);
+}
+
+static void test_resume(void)
+{
+    sasnav_run *run = simulate(5, 0.20, 3e-3, 3e-3, 3e-3);
+    if (!run) return;
+    sasnav_navigate_opts o;
+    sasnav_navigate_default_opts(&o);
+    o.pair.k = o.pair.coarse_k;
+    o.pair.i = o.pair.coarse_i;
+    o.pair.range_extent = 0.6;
+    record_log full = {0}, part = {0}, none = {0};
+    sasnav_navigation ref, nav;
+    o.progress = collect;
+    o.progress_user = &full;
+    CHECK_OK(sasnav_navigate(run, &o, &ref));
+    CHECK(full.n == 4 && full.resumed == 0, "%d records, %d resumed", full.n, full.resumed);
+    for (int j = 0; j < full.n; j++)
+        for (int i = 0; i < j; i++)
+            CHECK(full.rec[i].key != full.rec[j].key, "pairs %d and %d share a key", i, j);
+
+    /* Two of four pairs done (an interrupted run), in another order. */
+    sasnav_pair_record two[2] = {full.rec[3], full.rec[1]};
+    o.done = two;
+    o.n_done = 2;
+    o.progress_user = &part;
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    CHECK(part.resumed == 2 && part.n == 2, "resumed %d, estimated %d (want 2, 2)", part.resumed, part.n);
+    CHECK(same_navigation(&ref, &nav), "a resumed navigation differs from the uninterrupted one");
+    for (int j = 0; j < part.n; j++)
+        CHECK(part.rec[j].key == full.rec[0].key || part.rec[j].key == full.rec[2].key,
+              "estimated a pair that was given");
+    sasnav_navigation_free(&nav);
+
+    /* All done: nothing estimated, same result. */
+    o.done = full.rec;
+    o.n_done = full.n;
+    part = (record_log){0};
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    CHECK(part.resumed == 4 && part.n == 0, "all given: resumed %d, estimated %d", part.resumed, part.n);
+    CHECK(same_navigation(&ref, &nav), "a navigation from records differs");
+    sasnav_navigation_free(&nav);
+
+    /* Other options (k): no record applies. */
+    o.pair.k = o.pair.coarse_k + 1;
+    o.progress_user = &none;
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    CHECK(none.resumed == 0 && none.n == 4, "records used under other options (%d)", none.resumed);
+    sasnav_navigation_free(&nav);
+    o.pair.k = o.pair.coarse_k;
+
+    /* Same pings in a sub-run (pings 1..4): the keys still match. */
+    sasnav_run *sub = NULL;
+    int pings[4] = {1, 2, 3, 4};
+    CHECK_OK(sasnav_run_subset(run, pings, 4, NULL, 0, &sub));
+    if (sub) {
+        none = (record_log){0};
+        CHECK_OK(sasnav_navigate(sub, &o, &nav));
+        CHECK(none.resumed == 3 && none.n == 0, "sub-run: resumed %d, estimated %d", none.resumed, none.n);
+        for (int j = 0; j < 3 && nav.n_pairs == 3; j++)
+            CHECK(!memcmp(&nav.pairs[j].first_result.error, &ref.pairs[j + 1].first_result.error,
+                          sizeof(sasnav_pose)),
+                  "sub-run pair %d differs", j);
+        sasnav_navigation_free(&nav);
+        sasnav_run_free(sub);
+    }
+    /* A changed ping: its two pairs are estimated again. */
+    sasnav_run_ping(run, 2)[100] += 1e-3f;
+    none = (record_log){0};
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    CHECK(none.resumed == 2 && none.n == 2, "changed ping: resumed %d, estimated %d", none.resumed, none.n);
+    sasnav_navigation_free(&nav);
+    o.n_done = -1;
+    CHECK(sasnav_navigate(run, &o, &nav) == SASNAV_ERR_ARG, "n_done < 0 accepted");
+    sasnav_navigation_free(&ref);
+    sasnav_run_free(run);
+}
+
 /* Trust over a run: a compact scene (the `point` preset: one point
  * target, 4 pings around it) where single pairs are ambiguous and their
  * best candidates slip by phase-centre spacings. Without aiding every
@@ -462,6 +573,7 @@ int main(void)
 {
     test_trust_point();
     test_threads_over_pairs();
+    test_resume();
     test_bad_input();
     test_failed_pairs();
     test_dpca();

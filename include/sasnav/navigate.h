@@ -63,6 +63,8 @@
 #include "sasnav/estimator.h"
 #include "sasnav/run.h"
 
+#include <stdint.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -83,7 +85,27 @@ typedef struct {
     int status;          /* its status (SASNAV_OK or the failure code) */
     const sasnav_pair_result *result; /* its result (NULL before the first) */
     double seconds;      /* wall time since sasnav_navigate started */
+    uint64_t key;        /* content key of the pair (below; 0 before the first) */
+    int resumed;         /* 1: taken from opts.done, not estimated */
 } sasnav_navigate_progress;
+
+/* A pair estimated earlier, e.g. read back from a checkpoint (checkpoint.h): the first estimate of the pair whose content `key`
+ * names. The key is a 64-bit hash of what the pair's first estimate
+ * depends on: the two pings' samples and nominal poses, the run's
+ * Tx-array offset (or the per-ping offsets in use), range of interest,
+ * sound speed, carrier, band, sample rate, window, beam-pattern switch and
+ * array (receiver positions, apertures, heights), the estimation method and
+ * every option of its estimator (pair or dpca) but the thread counts.
+ * Not covered: the code itself (keep records per sasnav version: the
+ * checkpoint files do) and the aiding measurements, which the first
+ * estimates do not use (except through per-ping offsets, covered).
+ * Same pings in another sub-run (sasnav_validate's phases): same key. */
+typedef struct {
+    uint64_t key;              /* sasnav_navigate_progress.key of the pair */
+    int p, q;                  /* its pings where it was estimated (informative) */
+    int status;                /* the pair's first status */
+    sasnav_pair_result result; /* the pair's first result */
+} sasnav_pair_record;
 
 /* How the joint resolution treated a pair (sasnav_navigate_pair.resolution). */
 typedef enum {
@@ -166,6 +188,15 @@ typedef struct {
                                  first estimates (first_result) are used
                                  instead of estimating them again, e.g. to
                                  compare fusion settings (default NULL) */
+    const sasnav_pair_record *done; /* pairs estimated earlier (resuming
+                                 after an interruption): a pair whose key
+                                 is here is taken from its record instead
+                                 of being estimated, and reported to the
+                                 progress callback with resumed = 1; the
+                                 result is then the same bits as when it
+                                 is estimated (same options). Keys absent
+                                 from the run are ignored. Default NULL */
+    int n_done;               /* entries of done */
     sasnav_progress_fn progress; /* may be NULL */
     void *progress_user;      /* passed to progress */
 } sasnav_navigate_opts;

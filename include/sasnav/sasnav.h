@@ -40,6 +40,7 @@
 
 /* I/O layer */
 #include "sasnav/io.h"
+#include "sasnav/checkpoint.h"
 #include "sasnav/config.h"
 #include "sasnav/plot.h"
 

@@ -4,6 +4,7 @@
 #include "sasnav/error.h"
 #include "sasnav/trajectory.h"
 #include "core/clock.h"
+#include "core/hash.h"
 #include "trajectory/fuse.h"
 
 #include <math.h>
@@ -93,12 +94,111 @@ typedef struct {
     double pc_spacing;        /* m, the array's phase-centre spacing */
     double *lags;             /* per-ping EPCA Tx-array offsets (m), or NULL:
                                  run->tx_lag for every ping */
+    const sasnav_pair_record **done; /* opts->done sorted by key (NULL: none) */
+    int n_done;
+    uint64_t digest;          /* options_digest: the seed of every pair key */
 } nav_ctx;
 
-/* Estimates pair (p, q) into *np. Returns a fatal code, else SASNAV_OK
- * with np->status telling how the pair went. */
+static uint64_t hash_doubles(uint64_t h, const double *v, int n)
+{
+    for (int j = 0; j < n; j++) h = sasnav_hash_double(h, v[j]);
+    return h;
+}
+
+static uint64_t hash_ints(uint64_t h, const int *v, int n)
+{
+    for (int j = 0; j < n; j++) {
+        int64_t x = v[j];
+        h = sasnav_hash_bytes(h, &x, sizeof x);
+    }
+    return h;
+}
+
+/* Digest of everything in the options and the array that a pair's first
+ * estimate depends on (field by field: no padding bytes; thread counts
+ * left out, they do not change the bits). */
+static uint64_t options_digest(const sasnav_run *run, const sasnav_navigate_opts *o)
+{
+    uint64_t h = SASNAV_HASH_INIT;
+    const sasnav_array *a = &run->array;
+    h = hash_ints(h, &a->n_rx, 1);
+    h = hash_doubles(h, a->rx_u, a->n_rx);
+    const double ad[4] = {a->rx_length, a->tx_length, a->rx_height, a->tx_height};
+    h = hash_doubles(h, ad, 4);
+    const int mi[1] = {(int)o->method};
+    h = hash_ints(h, mi, 1);
+    if (o->method == SASNAV_METHOD_SUBSPACE) {
+        const sasnav_pair_opts *po = &o->pair;
+        const int pi[9] = {po->k, po->i, po->coarse_k, po->coarse_i, (int)po->norm, po->fix_yaw,
+                           po->global_stage, po->max_evaluations, po->op.pad_samples};
+        h = hash_ints(h, pi, 9);
+        const double pd[31] = {po->tikhonov, po->range_extent, po->cross_extent, po->pixel,
+                               po->coarse_pixel, po->blur, po->blur_cross, po->prior.x, po->prior.y,
+                               po->prior.theta, po->box.x, po->box.y, po->box.theta, po->yaw_sigma,
+                               po->surge_sigma, po->grid_step.x, po->grid_step.y, po->grid_step.theta,
+                               po->error_extent, po->error_taper, po->min_overlap,
+                               po->verdict_eta_max, po->verdict_margin_min, po->op.tolerance,
+                               po->op.oversampling, 0, 0, 0, 0, 0, 0};
+        h = hash_doubles(h, pd, 31);
+    } else if (o->method == SASNAV_METHOD_DPCA) {
+        const sasnav_dpca_opts *d = &o->dpca;
+        const int di[4] = {d->upsampling, d->use_phase, d->unwrap, d->bistatic_correction};
+        h = hash_ints(h, di, 4);
+        const double dd[4] = {d->range, d->half_width, d->max_sway, d->min_coherence};
+        h = hash_doubles(h, dd, 4);
+    }
+    return h;
+}
+
+/* Content key of pair (p, q): navigate.h, sasnav_pair_record. */
+static uint64_t pair_key(const nav_ctx *ctx, int p, int q)
+{
+    const sasnav_run *run = ctx->run;
+    size_t n = (size_t)run->array.n_rx * (size_t)run->win.n_samples;
+    uint64_t h = ctx->digest;
+    int head[4] = {(int)ctx->opts->method, run->array.n_rx, run->win.n_samples, run->sys.beam_pattern};
+    h = sasnav_hash_bytes(h, head, sizeof head);
+    const double sys[6] = {run->sys.sound_speed, run->sys.f0, run->sys.bandwidth,
+                           run->sys.sample_rate, run->win.t0, run->range_of_interest};
+    for (int j = 0; j < 6; j++) h = sasnav_hash_double(h, sys[j]);
+    const int pings[2] = {p, q};
+    for (int k = 0; k < 2; k++) {
+        int i = pings[k];
+        h = sasnav_hash_bytes(h, sasnav_run_ping(run, i), n * sizeof(sasnav_cfloat));
+        const sasnav_ping_pose *a = &run->nav[i];
+        const double v[6] = {a->tx.x, a->tx.y, a->tx.theta, a->array.x, a->array.y, a->array.theta};
+        for (int j = 0; j < 6; j++) h = sasnav_hash_double(h, v[j]);
+        h = sasnav_hash_double(h, ctx->lags ? ctx->lags[i] : run->tx_lag);
+    }
+    return h ? h : 1; /* 0 means "no key" in the progress report */
+}
+
+static int record_cmp(const void *a, const void *b)
+{
+    uint64_t x = (*(const sasnav_pair_record *const *)a)->key;
+    uint64_t y = (*(const sasnav_pair_record *const *)b)->key;
+    return x < y ? -1 : x > y;
+}
+
+/* The record of `key` in ctx->done, or NULL. */
+static const sasnav_pair_record *find_record(const nav_ctx *ctx, uint64_t key)
+{
+    int lo = 0, hi = ctx->n_done - 1;
+    while (lo <= hi) {
+        int mid = lo + (hi - lo) / 2;
+        uint64_t k = ctx->done[mid]->key;
+        if (k == key) return ctx->done[mid];
+        if (k < key) lo = mid + 1;
+        else hi = mid - 1;
+    }
+    return NULL;
+}
+
+/* Estimates pair (p, q) into *np (or takes it from ctx->done: *resumed
+ * = 1). Returns a fatal code, else SASNAV_OK with np->status telling how
+ * the pair went. *key: the pair's content key. */
 static int estimate_pair(nav_ctx *ctx, sasnav_pair *estimator, int p, int q,
-                         sasnav_navigate_pair *np)
+                         sasnav_navigate_pair *np, uint64_t *key, int *resumed)
 {
     const sasnav_run *run = ctx->run;
     memset(np, 0, sizeof *np);
@@ -108,6 +208,18 @@ static int estimate_pair(nav_ctx *ctx, sasnav_pair *estimator, int p, int q,
     if (run->truth) {
         sasnav_pose d = sasnav_ping_displacement(&run->truth[p], &run->truth[q]);
         np->truth = pose_sub(d, np->nominal);
+    }
+    *key = pair_key(ctx, p, q);
+    *resumed = 0;
+    const sasnav_pair_record *rec = ctx->n_done > 0 ? find_record(ctx, *key) : NULL;
+    if (rec) {
+        np->result = rec->result;
+        np->status = rec->status;
+        np->first_result = np->result;
+        np->first_status = np->status;
+        if (run->truth) np->error = pose_sub(np->result.error, np->truth);
+        *resumed = 1;
+        return SASNAV_OK;
     }
     int rc;
     const sasnav_navigation *reuse = ctx->opts->reuse;
@@ -163,12 +275,13 @@ static int estimate_pair(nav_ctx *ctx, sasnav_pair *estimator, int p, int q,
     return SASNAV_OK;
 }
 
-static void report(nav_ctx *ctx, int done, int total, const sasnav_navigate_pair *np)
+static void report(nav_ctx *ctx, int done, int total, const sasnav_navigate_pair *np,
+                   uint64_t key, int resumed)
 {
     if (!ctx->opts->progress) return;
     sasnav_navigate_progress pr = {done, total, np ? np->p : -1, np ? np->q : -1,
                                    np ? np->status : SASNAV_OK, np ? &np->result : NULL,
-                                   sasnav_now_seconds() - ctx->t0};
+                                   sasnav_now_seconds() - ctx->t0, key, resumed};
     ctx->opts->progress(&pr, ctx->opts->progress_user);
 }
 
@@ -196,6 +309,8 @@ static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
     if (o->reuse && (o->reuse->method != o->method || o->reuse->n_pings != run->n_pings || !o->reuse->pairs))
         return sasnav_set_error(SASNAV_ERR_ARG,
                                 "navigate: the navigation to reuse is of another method or run");
+    if (o->n_done < 0 || (o->n_done > 0 && !o->done))
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigate: %d earlier pairs given without records", o->n_done);
     if (!sigma_ok(o->link_sigma) || !sigma_ok(o->long_sigma))
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: link standard deviations must be > 0");
     if (o->nthreads < 0) return sasnav_set_error(SASNAV_ERR_ARG, "navigate: nthreads < 0");
@@ -259,7 +374,7 @@ static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
             pq[2 * k + 1] = p + 2;
             k++;
         }
-    report(ctx, 0, total, NULL);
+    report(ctx, 0, total, NULL, 0, 0);
     double t_est = sasnav_now_seconds();
     /* Independent pairs run concurrently, one estimator per thread; each
      * pair's result depends on its own data only (the operators sum in a
@@ -274,8 +389,10 @@ static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
         skip = stop;
         if (skip) continue;
         int t = ctx->n_workers > 1 ? omp_get_thread_num() : 0;
+        uint64_t key;
+        int resumed;
         int rc = estimate_pair(ctx, ctx->estimators ? ctx->estimators[t] : NULL, pq[2 * j],
-                               pq[2 * j + 1], &out->pairs[j]);
+                               pq[2 * j + 1], &out->pairs[j], &key, &resumed);
         codes[j] = rc;
         if (rc) {
             snprintf(messages[j], sizeof messages[j], "%s", sasnav_last_error());
@@ -285,7 +402,7 @@ static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
 #pragma omp critical(sasnav_navigate_progress)
             {
                 done++;
-                report(ctx, done, total, &out->pairs[j]);
+                report(ctx, done, total, &out->pairs[j], key, resumed);
             }
         }
     }
@@ -815,7 +932,7 @@ int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
     if (rc) return rc;
     nav_ctx ctx = {run, opts, NULL, 1, sasnav_now_seconds(),
                    run->array.n_rx > 1 ? 0.5 * fabs(run->array.rx_u[1] - run->array.rx_u[0]) : 0.025,
-                   NULL};
+                   NULL, NULL, 0, options_digest(run, opts)};
     out->method = opts->method;
     out->n_pings = run->n_pings;
     /* Threads: over pairs when there are several pairs (one estimator, or
@@ -841,7 +958,17 @@ int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
         for (int t = 0; t < ctx.n_workers && !rc; t++)
             rc = sasnav_pair_create(&run->sys, &run->array, &run->win, &po, &ctx.estimators[t]);
     }
+    if (!rc && opts->n_done > 0) {
+        ctx.done = malloc(sizeof *ctx.done * (size_t)opts->n_done);
+        if (!ctx.done) rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        else {
+            for (int j = 0; j < opts->n_done; j++) ctx.done[j] = &opts->done[j];
+            qsort(ctx.done, (size_t)opts->n_done, sizeof *ctx.done, record_cmp);
+            ctx.n_done = opts->n_done;
+        }
+    }
     if (!rc) rc = navigate(&ctx, out);
+    free(ctx.done);
     if (ctx.estimators)
         for (int t = 0; t < ctx.n_workers; t++) sasnav_pair_destroy(ctx.estimators[t]);
     free(ctx.estimators);

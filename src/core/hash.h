@@ -1,0 +1,29 @@
+/* 64-bit FNV-1a hash (Fowler, Noll, Vo): content keys of ping pairs
+ * (navigate.c) and the checksums of checkpoint records (io/checkpoint.c).
+ * Not cryptographic: it tells accidental differences apart (another run,
+ * a torn or corrupted record), not crafted ones. Private to the library. */
+#ifndef SASNAV_HASH_H
+#define SASNAV_HASH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define SASNAV_HASH_INIT UINT64_C(14695981039346656037)
+
+static inline uint64_t sasnav_hash_bytes(uint64_t h, const void *data, size_t n)
+{
+    const unsigned char *b = data;
+    for (size_t i = 0; i < n; i++) {
+        h ^= b[i];
+        h *= UINT64_C(1099511628211);
+    }
+    return h;
+}
+
+static inline uint64_t sasnav_hash_double(uint64_t h, double v)
+{
+    if (v == 0) v = 0; /* -0 and +0 alike */
+    return sasnav_hash_bytes(h, &v, sizeof v);
+}
+
+#endif
