@@ -325,6 +325,19 @@ class NavigateProgress(Structure):  # navigate.h
         ("status", c_int),
         ("result", POINTER(PairResult)),
         ("seconds", c_double),
+        ("key", c_uint64),
+        ("resumed", c_int),
+    ]
+
+
+class PairRecord(Structure):  # navigate.h
+    _c_name_ = "sasnav_pair_record"
+    _fields_ = [
+        ("key", c_uint64),
+        ("p", c_int),
+        ("q", c_int),
+        ("status", c_int),
+        ("result", PairResult),
     ]
 
 
@@ -350,6 +363,8 @@ class NavigateOpts(Structure):  # navigate.h
         ("speed_lags", c_int),
         ("aiding_bias_sigma", Pose),
         ("reuse", c_void_p),  # const sasnav_navigation *
+        ("done", POINTER(PairRecord)),
+        ("n_done", c_int),
         ("progress", PROGRESS_FN),
         ("progress_user", c_void_p),
     ]
