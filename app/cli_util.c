@@ -10,14 +10,23 @@
 
 int cli_fail(const char *command, int rc, const char *fmt, ...)
 {
-    fprintf(stderr, "sasnav %s: ", command);
+    char msg[1024];
     va_list ap;
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
+    fprintf(stderr, "sasnav %s: %s", command, msg);
     if (rc < 0) {
         const char *detail = sasnav_last_error();
-        fprintf(stderr, ": %s", detail && detail[0] ? detail : sasnav_strerror(rc));
+        if (!detail || !detail[0]) detail = sasnav_strerror(rc);
+        /* "cannot read X" + "X: cannot open: ..." -> "cannot read X: cannot
+         * open: ...": the library's messages start with the path they are
+         * about, which the command's message has just named. */
+        const char *last = strrchr(msg, ' ');
+        last = last ? last + 1 : msg;
+        size_t n = strlen(last);
+        if (n > 0 && !strncmp(detail, last, n) && detail[n] == ':' && detail[n + 1] == ' ') detail += n + 2;
+        fprintf(stderr, ": %s", detail);
     }
     fputc('\n', stderr);
     return 1;

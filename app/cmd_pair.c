@@ -137,7 +137,9 @@ int cmd_pair(int argc, char **argv)
     if (p < 0 || q < 0 || p >= run->n_pings || q >= run->n_pings) {
         int n = run->n_pings;
         sasnav_run_free(run);
-        return cli_fail("pair", 0, "ping index out of range (the run has %d pings)", n);
+        long bad = p < 0 || p >= n ? p : q;
+        return cli_fail("pair", 0, "--%c %ld: %s has %d pings (0..%d)", bad == p && (p < 0 || p >= n) ? 'p' : 'q',
+                        bad, input, n, n - 1);
     }
     if (!isfinite(range)) range = run->range_of_interest > 0 ? run->range_of_interest : 10.0;
     sasnav_pose nominal = sasnav_ping_displacement(&run->nav[p], &run->nav[q]);

@@ -86,7 +86,7 @@ int cmd_simulate(int argc, char **argv)
 
     sasnav_scenario sc;
     int rc = sasnav_scenario_preset(preset, &sc);
-    if (rc) return cli_fail("simulate", rc, "preset");
+    if (rc) return cli_usage("simulate", "--preset needs paper-pair, paper-trajectory, point or tank (got '%s')", preset);
     if (config && (rc = sasnav_config_load(config, &sc)))
         return cli_fail("simulate", rc, "invalid configuration");
     if (seed) {
