@@ -1,6 +1,7 @@
 /* sasnav refine: multi-ping data-domain refinement of a navigation. */
 #include "cli.h"
 
+#include "sasnav/checkpoint.h"
 #include "sasnav/io.h"
 #include "sasnav/refine.h"
 #include "sasnav/run.h"
@@ -10,11 +11,30 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* --checkpoint: the state after every sweep, written whole (temporary
+ * file and rename). */
+typedef struct {
+    const char *path;
+    int failed;
+} refine_ckpt;
+
+static void save_state(const sasnav_refine_state *st, void *user)
+{
+    refine_ckpt *k = user;
+    if (k->failed) return;
+    if (sasnav_refine_state_write(k->path, st)) {
+        k->failed = 1;
+        fprintf(stderr, "sasnav refine: warning: %s; going on without checkpointing\n", sasnav_last_error());
+    }
+}
 
 static const char *help =
     "usage: sasnav refine run.h5 nav.h5 -o refined.h5 [--grid X0,X1,NX,Y0,Y1,NY]\n"
     "                     [--sweeps N] [--surge-range M] [--sway-range M] [--sparsity EPS]\n"
-    "                     [--threads N]\n"
+    "                     [--threads N] [--checkpoint FILE]\n"
     "\n"
     "Refines a navigation (the output of 'sasnav navigate', or any navigation\n"
     "file of the run's pings) with all pings together: for each ping in turn,\n"
@@ -37,6 +57,10 @@ static const char *help =
     "  --surge-range M   half-width of the surge search, m (default 0.012)\n"
     "  --sway-range M    half-width of the sway search, m (default 0.0015)\n"
     "  --threads N       OpenMP threads (default: all cores)\n"
+    "  --checkpoint FILE  keep the refinement's state in FILE after every sweep;\n"
+    "                    the same command run again after an interruption\n"
+    "                    resumes from it with the same result (docs/cli.md).\n"
+    "                    FILE is removed once -o is written\n"
     "  -o FILE           output navigation (HDF5, with the run's truth if any)\n";
 
 int cmd_refine(int argc, char **argv)
@@ -46,10 +70,10 @@ int cmd_refine(int argc, char **argv)
         {"surge-range", required_argument, 0, 'u'}, {"sway-range", required_argument, 0, 'v'},
         {"threads", required_argument, 0, 't'},     {"output", required_argument, 0, 'o'},
         {"sparsity", required_argument, 0, 'e'},    {"help", no_argument, 0, 'h'},
-        {0, 0, 0, 0}};
+        {"checkpoint", required_argument, 0, 'C'},  {0, 0, 0, 0}};
     sasnav_refine_opts ro;
     sasnav_refine_default_opts(&ro);
-    const char *output = NULL;
+    const char *output = NULL, *checkpoint = NULL;
     long sweeps = ro.sweeps, threads = 0;
     int opt;
     optind = 1;
@@ -74,6 +98,7 @@ int cmd_refine(int argc, char **argv)
             break;
         case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_usage("refine", "--threads needs 0..1024"); break;
         case 'o': output = optarg; break;
+        case 'C': checkpoint = optarg; break;
         case 'h': fputs(help, stdout); return 0;
         default: return cli_bad_option("refine", argv, longopts);
         }
@@ -98,16 +123,42 @@ int cmd_refine(int argc, char **argv)
         free(nav);
         return cli_fail("refine", 0, "%s has %d pings, %s has %d", nav_path, n, run_path, run->n_pings);
     }
+    sasnav_refine_state resume;
+    memset(&resume, 0, sizeof resume);
+    refine_ckpt ck = {checkpoint, 0};
+    if (checkpoint) {
+        if (access(checkpoint, F_OK) == 0) {
+            rc = sasnav_refine_state_read(checkpoint, &resume);
+            if (rc) {
+                sasnav_run_free(run);
+                free(nav);
+                return cli_fail("refine", rc, "cannot use checkpoint %s", checkpoint);
+            }
+            ro.resume = &resume;
+            fprintf(stderr, "sasnav refine: resuming from %s (%d sweeps done before)\n", checkpoint,
+                    resume.sweeps_done);
+        }
+        ro.sweep_done = save_state;
+        ro.sweep_user = &ck;
+    }
     sasnav_ping_pose *out = malloc(sizeof *out * n);
     sasnav_refine_report rep;
     rc = out ? sasnav_refine(run, nav, &ro, out, &rep) : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    int refined = !rc;
     if (!rc) rc = sasnav_nav_write(output, n, out, run->truth);
+    sasnav_refine_state_free(&resume);
     if (rc) {
         sasnav_run_free(run);
         free(nav);
         free(out);
-        return cli_fail("refine", rc, "refinement of %s failed", nav_path);
+        rc = refined ? cli_fail("refine", rc, "cannot write %s", output)
+                     : cli_fail("refine", rc, "refinement of %s failed", nav_path);
+        if (checkpoint && !ck.failed && access(checkpoint, F_OK) == 0)
+            fprintf(stderr, "sasnav refine: state kept in %s: run the same command again to resume\n", checkpoint);
+        return rc;
     }
+    if (checkpoint && unlink(checkpoint) && access(checkpoint, F_OK) == 0)
+        fprintf(stderr, "sasnav refine: warning: cannot remove checkpoint %s\n", checkpoint);
     for (int s = 0; s < rep.sweeps; s++)
         printf("sweep %d: mean misfit %.5f -> %.5f, rms move %.3f mm\n", s + 1, rep.misfit[s], rep.misfit[s + 1],
                1e3 * rep.rms_move[s]);

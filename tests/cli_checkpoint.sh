@@ -8,13 +8,15 @@
 # record (cut by 7 bytes) is dropped and that pair estimated again, with
 # the same result. A file in use by another process, FILE of another
 # command and a foreign file are refused (exit 1, one clear line); a
-# navigate that cannot write its output keeps FILE. `sasnav validate --checkpoint`
+# navigate that cannot write its output keeps FILE. `sasnav refine
+# --checkpoint` the same way (its state after each sweep). `sasnav validate --checkpoint`
 # is exercised in cli_validate.sh.
 # Usage: sh tests/cli_checkpoint.sh path/to/sasnav
 set -u
 CLI=${1:?usage: cli_checkpoint.sh path/to/sasnav}
 T=$(mktemp -d "${TMPDIR:-/tmp}/sasnav-cli-checkpoint-XXXXXX") || exit 1
 trap 'rm -rf "$T"' EXIT INT TERM
+mkdir -p "$T/ro" && : > "$T/ro/x" # a file where a directory is needed
 FAILED=0
 fail() {
     echo "cli_checkpoint: FAIL: $*" >&2
@@ -78,6 +80,43 @@ else
     fi
 fi
 
+# refine --checkpoint: killed after its first sweep's state is written,
+# resumed (with another thread count) to the uninterrupted result. A small
+# scene grid keeps sweeps short; what is tested is the bookkeeping.
+RG="--grid -0.4,0.4,81,9.7,10.3,61 --sweeps 6"
+# shellcheck disable=SC2086
+"$CLI" refine "$T/run.h5" "$T/a.h5" $RG --threads 1 -o "$T/ra.h5" > /dev/null 2> "$T/ra.err" || fail "refine: $(cat "$T/ra.err")"
+# shellcheck disable=SC2086
+"$CLI" refine "$T/run.h5" "$T/a.h5" $RG --threads 1 --checkpoint "$T/rck.h5" -o "$T/rb.h5" > /dev/null 2>&1 &
+PID=$!
+i=0
+while [ "$i" -lt 6000 ] && [ ! -e "$T/rck.h5" ] && kill -0 "$PID" 2>/dev/null; do
+    sleep 0.05
+    i=$((i + 1))
+done
+kill -TERM "$PID" 2>/dev/null
+wait "$PID"
+if [ $? -eq 0 ]; then
+    fail "refine finished before it could be interrupted"
+else
+    [ -e "$T/rb.h5" ] && fail "an interrupted refine left an output"
+    # shellcheck disable=SC2086
+    if "$CLI" refine "$T/run.h5" "$T/a.h5" $RG --threads 2 --checkpoint "$T/rck.h5" -o "$T/rb.h5" > /dev/null 2> "$T/rb.err"; then
+        grep -q "resuming from .*rck.h5 (. sweeps done before)" "$T/rb.err" || fail "refine: no 'resuming' line: $(cat "$T/rb.err")"
+        h5diff "$T/ra.h5" "$T/rb.h5" > "$T/diff.txt" 2>&1 || fail "resumed refine differs: $(head -n 5 "$T/diff.txt")"
+        [ -e "$T/rck.h5" ] && fail "refine checkpoint not removed after success"
+    else
+        fail "refine resume failed: $(cat "$T/rb.err")"
+    fi
+fi
+# A refinement state of other options is refused by the library.
+# shellcheck disable=SC2086
+"$CLI" refine "$T/run.h5" "$T/a.h5" $RG --checkpoint "$T/rck2.h5" -o "$T/ro/x/r.h5" > /dev/null 2>&1
+[ -e "$T/rck2.h5" ] || fail "a refine that could not write its output removed its state"
+"$CLI" refine "$T/run.h5" "$T/a.h5" --grid -0.4,0.4,81,9.7,10.3,61 --sweeps 6 --sparsity 0.5 --checkpoint "$T/rck2.h5" -o "$T/r.h5" > /dev/null 2> "$T/r.err"
+[ $? -eq 1 ] && grep -q "another run, input navigation, grid or options" "$T/r.err" ||
+    fail "refine state of other options: $(cat "$T/r.err")"
+
 # Refusals: exit 1 and one line naming the file.
 expect_refusal() { # what, pattern, command...
     what=$1 pat=$2
@@ -94,7 +133,6 @@ expect_refusal "a foreign file" "not a sasnav checkpoint" \
 grep -q "not a checkpoint" "$T/foreign" || fail "the refused foreign file was changed"
 # A navigate that cannot write its output keeps its checkpoint (and says
 # how to resume); given to another command, that checkpoint is refused.
-mkdir -p "$T/ro" && : > "$T/ro/x" # a file where a directory is needed
 "$CLI" navigate "$T/run.h5" --method dpca --checkpoint "$T/ck2" -o "$T/ro/x/nav.h5" > /dev/null 2> "$T/d.err"
 [ -s "$T/ck2" ] || fail "a navigate that could not write its output removed its checkpoint"
 grep -q "run the same command again to resume" "$T/d.err" || fail "no resume hint after a failed write: $(cat "$T/d.err")"

@@ -93,6 +93,88 @@ static void test_refusals(const sasnav_run *run, const sasnav_ping_pose *start, 
     free(bad);
 }
 
+/* Deep copies of the states sweep_done is given (checkpoints). */
+typedef struct {
+    sasnav_refine_state st[SASNAV_REFINE_MAX_SWEEPS];
+    int n;
+} state_log;
+
+static void keep_state(const sasnav_refine_state *st, void *user)
+{
+    state_log *l = user;
+    if (l->n >= SASNAV_REFINE_MAX_SWEEPS) return;
+    sasnav_refine_state *c = &l->st[l->n++];
+    *c = *st;
+    c->poses = malloc(sizeof *c->poses * st->n_pings);
+    c->move_u = malloc(sizeof(double) * st->n_pings);
+    c->move_v = malloc(sizeof(double) * st->n_pings);
+    c->scene = malloc(sizeof *c->scene * st->n_pixels);
+    c->weights = malloc(sizeof *c->weights * st->n_pixels);
+    memcpy(c->poses, st->poses, sizeof *c->poses * st->n_pings);
+    memcpy(c->move_u, st->move_u, sizeof(double) * st->n_pings);
+    memcpy(c->move_v, st->move_v, sizeof(double) * st->n_pings);
+    memcpy(c->scene, st->scene, sizeof *c->scene * st->n_pixels);
+    memcpy(c->weights, st->weights, sizeof *c->weights * st->n_pixels);
+}
+
+/* Resuming from the state after each sweep gives the uninterrupted
+ * result, bit for bit (poses and report); a state is refused by a
+ * refinement of another input navigation or other options. On the
+ * reflectors-only grid, where every sweep is kept (3 sweeps; 2 with
+ * the sanitizers): resumed sweeps must then reproduce the scene, its
+ * weights and damping, not only the poses. */
+static void test_resume(const sasnav_run *run, const sasnav_ping_pose *start, const sasnav_refine_opts *main_opts)
+{
+    int n = run->n_pings;
+    sasnav_refine_opts base = *main_opts;
+    CHECK_OK(sasnav_grid_make(-0.15, 0.15, 61, 1.35, 1.65, 61, &base.grid));
+#ifdef SASNAV_TEST_SANITIZED
+    base.sweeps = 2;
+#else
+    base.sweeps = 3;
+#endif
+    base.stop_move = 0;
+    static state_log slog;
+    state_log *log = &slog;
+    base.sweep_done = keep_state;
+    base.sweep_user = log;
+    sasnav_ping_pose *out = malloc(sizeof *out * n);
+    sasnav_refine_report r0, *rep = &r0;
+    CHECK_OK(sasnav_refine(run, start, &base, out, rep));
+    CHECK(rep->sweeps == base.sweeps && !rep->undone, "resume case: %d sweeps, undone %d (want every sweep kept)",
+          rep->sweeps, rep->undone);
+    CHECK(log->n == rep->sweeps, "%d states for %d sweeps", log->n, rep->sweeps);
+    CHECK(log->n == 0 || log->st[log->n - 1].finished || rep->undone, "last state not finished");
+    sasnav_ping_pose *b = malloc(sizeof *b * n);
+    for (int k = 0; k < log->n; k++) {
+        sasnav_refine_opts o = base;
+        o.sweep_done = NULL;
+        o.resume = &log->st[k];
+        sasnav_refine_report r2;
+        CHECK_OK(sasnav_refine(run, start, &o, b, &r2));
+        CHECK(!memcmp(b, out, sizeof *b * n), "resumed after sweep %d: other poses", k + 1);
+        CHECK(r2.sweeps == rep->sweeps && r2.undone == rep->undone &&
+                  !memcmp(r2.misfit, rep->misfit, sizeof r2.misfit) &&
+                  !memcmp(r2.rms_move, rep->rms_move, sizeof r2.rms_move),
+              "resumed after sweep %d: report differs (%d sweeps vs %d)", k + 1, r2.sweeps, rep->sweeps);
+    }
+    if (log->n > 0) {
+        sasnav_refine_opts o = base;
+        o.sweep_done = NULL;
+        o.resume = &log->st[0];
+        sasnav_ping_pose *moved = malloc(sizeof *moved * n);
+        memcpy(moved, start, sizeof *moved * n);
+        moved[1].array.x += 1e-4;
+        CHECK(sasnav_refine(run, moved, &o, b, NULL) == SASNAV_ERR_ARG, "state resumed on another input");
+        o.damping *= 2;
+        CHECK(sasnav_refine(run, start, &o, b, NULL) == SASNAV_ERR_ARG, "state resumed with other options");
+        free(moved);
+    }
+    free(b);
+    free(out);
+    for (int k = 0; k < log->n; k++) sasnav_refine_state_free(&log->st[k]);
+}
+
 int main(void)
 {
     sasnav_run *run = test_tank_short_run(N_PINGS, 6);
@@ -169,6 +251,7 @@ int main(void)
         free(a);
         free(b);
     }
+    test_resume(run, start, &o);
     test_refusals(run, start, &o);
     free(start);
     free(out);

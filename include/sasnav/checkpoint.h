@@ -25,6 +25,7 @@
 #define SASNAV_CHECKPOINT_H
 
 #include "sasnav/navigate.h"
+#include "sasnav/refine.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -60,6 +61,17 @@ int sasnav_checkpoint_count(const sasnav_checkpoint *ck);
  * SASNAV_ERR_IO when the last records cannot be flushed or the file not
  * removed. */
 int sasnav_checkpoint_close(sasnav_checkpoint *ck, int remove_file);
+
+/* Refinement states (`sasnav refine --checkpoint`; refine.h): an HDF5
+ * file of format "sasnav-refine-state" (docs/format.md, "Checkpoints"),
+ * written to a temporary name and renamed (always whole), replaced after
+ * every sweep. The reader checks the layout, the sasnav version that wrote
+ * it (SASNAV_ERR_FORMAT for another) and finite values; whether the state
+ * belongs to the run, navigation and options at hand is checked by
+ * sasnav_refine (its digest). Free what was read with
+ * sasnav_refine_state_free. Errors as io.h's readers and writers. */
+int sasnav_refine_state_write(const char *path, const sasnav_refine_state *state);
+int sasnav_refine_state_read(const char *path, sasnav_refine_state *state);
 
 #ifdef __cplusplus
 }

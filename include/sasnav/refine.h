@@ -67,11 +67,15 @@
 #include "sasnav/image.h"
 #include "sasnav/op.h"
 #include "sasnav/run.h"
+
+#include <stdint.h>
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 #define SASNAV_REFINE_MAX_SWEEPS 32
+
+typedef struct sasnav_refine_state sasnav_refine_state;
 
 typedef struct {
     sasnav_grid grid;     /* scene grid, world frame; nx = 0 (default): the
@@ -100,6 +104,19 @@ typedef struct {
                              0: uniform damping mu */
     sasnav_op_opts op;    /* operator options (default tolerance 1e-3) */
     int nthreads;         /* OpenMP threads (0 = OpenMP default) */
+    /* Checkpoints (docs/cli.md, "Resuming"): */
+    void (*sweep_done)(const sasnav_refine_state *state, void *user);
+                          /* called after every completed sweep with the
+                             state to resume from (may be NULL); the
+                             state's arrays are valid during the call */
+    void *sweep_user;     /* passed to sweep_done */
+    const sasnav_refine_state *resume; /* continue from this state (one
+                             that sweep_done was given, e.g. read back with
+                             sasnav_refine_state_read) instead of from the
+                             input: the same bits as a refinement that was
+                             never interrupted. It must be of the same run,
+                             input navigation and options (its digest):
+                             else SASNAV_ERR_ARG. Default NULL */
 } sasnav_refine_opts;
 
 void sasnav_refine_default_opts(sasnav_refine_opts *opts);
@@ -119,6 +136,28 @@ typedef struct {
     double mean_move_surge, mean_move_sway;     /* m, the common move removed */
     double seconds;
 } sasnav_refine_report;
+
+/* The state of a refinement after a completed sweep. */
+struct sasnav_refine_state {
+    uint64_t digest;             /* of the run, the input navigation and the
+                                    options (thread count and callbacks
+                                    aside): what the state belongs to */
+    int n_pings;
+    int n_pixels;                /* of the scene grid */
+    int sweeps_done;             /* sweeps completed (= report.sweeps) */
+    int finished;                /* 1: no sweep is left (the stop rule or
+                                    the sweep count ended the refinement) */
+    double mu;                   /* absolute scene damping in use */
+    sasnav_ping_pose *poses;     /* n_pings: current poses */
+    double *move_u, *move_v;     /* n_pings: accumulated surge / sway moves */
+    sasnav_cfloat *scene;        /* n_pixels: the last scene (warm start) */
+    float *weights;              /* n_pixels: the reweighted damping */
+    sasnav_refine_report report; /* so far (seconds: of the sweeps so far) */
+};
+
+/* Frees the arrays of a state made by the I/O layer
+ * (sasnav_refine_state_read) and zeroes it; safe on NULL. */
+void sasnav_refine_state_free(sasnav_refine_state *state);
 
 /* Refines the ping poses `nav_in` (n = run->n_pings >= 3, world frame) of
  * `run` into `nav_out` (may equal nav_in). `opts` and `report` may be

@@ -2,11 +2,14 @@
  * The checked low-level access is in h5_util.c; this file maps the
  * library's structures onto the layout and validates what it reads. */
 #include "sasnav/io.h"
+#include "sasnav/checkpoint.h"
 
 #include "io/h5_util.h"
 #include "sasnav/error.h"
 
 #include <math.h>
+#include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -509,5 +512,125 @@ int sasnav_image_read(const char *path, sasnav_grid *grid, sasnav_cfloat **image
     int rc = h5_open_read(&c, IMAGE_FORMATS, 1);
     if (!rc) rc = image_read_open(&c, grid, image);
     h5_end(&c);
+    return rc;
+}
+
+/* --- refinement states (checkpoint.h) ------------------------------------- */
+
+static const char *const REFINE_STATE_FORMATS[] = {"sasnav-refine-state"};
+
+int sasnav_refine_state_write(const char *path, const sasnav_refine_state *st)
+{
+    if (!path || !st || st->n_pings < 3 || st->n_pixels < 1 || !st->poses || !st->move_u || !st->move_v ||
+        !st->scene || !st->weights)
+        return sasnav_set_error(SASNAV_ERR_ARG, "refinement state write needs a path and a whole state");
+    size_t np = (size_t)st->n_pixels;
+    double *w = malloc(sizeof *w * np);
+    if (!w) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    for (size_t i = 0; i < np; i++) w[i] = st->weights[i];
+    char digest[17];
+    snprintf(digest, sizeof digest, "%016llx", (unsigned long long)st->digest);
+    h5_ctx c;
+    h5_begin(&c, path);
+    int rc = h5_create_tmp(&c, "sasnav-refine-state");
+    hsize_t dn[1] = {(hsize_t)st->n_pings}, dp[1] = {(hsize_t)np};
+    hsize_t dm[1] = {SASNAV_REFINE_MAX_SWEEPS + 1}, dr[1] = {SASNAV_REFINE_MAX_SWEEPS};
+    const sasnav_refine_report *r = &st->report;
+    if (!rc) rc = h5_write_attr_string(&c, "/", "digest", digest);
+    if (!rc) rc = h5_write_attr_int(&c, "/", "sweeps_done", st->sweeps_done);
+    if (!rc) rc = h5_write_attr_int(&c, "/", "finished", st->finished);
+    if (!rc) rc = h5_write_attr_double(&c, "/", "mu", st->mu);
+    if (!rc) rc = poses_write(&c, "/poses", st->n_pings, st->poses);
+    if (!rc) rc = h5_write_dataset(&c, "/move_u", H5_REAL, 1, dn, NULL, st->move_u, "m");
+    if (!rc) rc = h5_write_dataset(&c, "/move_v", H5_REAL, 1, dn, NULL, st->move_v, "m");
+    if (!rc) rc = h5_write_dataset(&c, "/scene", H5_COMPLEX, 1, dp, NULL, st->scene, NULL);
+    if (!rc) rc = h5_write_dataset(&c, "/weights", H5_REAL, 1, dp, NULL, w, NULL);
+    if (!rc) rc = h5_create_group(&c, "/report");
+    if (!rc) rc = h5_write_attr_int(&c, "/report", "sweeps", r->sweeps);
+    if (!rc) rc = h5_write_attr_int(&c, "/report", "undone", r->undone);
+    if (!rc) rc = h5_write_attr_double(&c, "/report", "seconds", r->seconds);
+    if (!rc) rc = h5_write_dataset(&c, "/report/misfit", H5_REAL, 1, dm, NULL, r->misfit, NULL);
+    if (!rc) rc = h5_write_dataset(&c, "/report/rms_move", H5_REAL, 1, dr, NULL, r->rms_move, "m");
+    if (!rc) rc = h5_commit(&c);
+    h5_end(&c);
+    free(w);
+    return rc;
+}
+
+int sasnav_refine_state_read(const char *path, sasnav_refine_state *st)
+{
+    if (!path || !st) return sasnav_set_error(SASNAV_ERR_ARG, "refinement state read: NULL argument");
+    memset(st, 0, sizeof *st);
+    h5_ctx c;
+    h5_begin(&c, path);
+    int rc = h5_open_read(&c, REFINE_STATE_FORMATS, 1);
+    char created[64] = "", digest[32] = "";
+    if (!rc) rc = h5_read_attr_string(&c, "/", "created_by", created, sizeof created);
+    if (!rc && strcmp(created, SASNAV_H5_CREATED_BY))
+        rc = h5_fail(&c, SASNAV_ERR_FORMAT, "written by %s, this is %s: remove it to start again", created,
+                     SASNAV_H5_CREATED_BY);
+    if (!rc) rc = h5_read_attr_string(&c, "/", "digest", digest, sizeof digest);
+    char *end = NULL;
+    unsigned long long dg = rc ? 0 : strtoull(digest, &end, 16);
+    if (!rc && (strlen(digest) != 16 || !end || *end))
+        rc = h5_fail(&c, SASNAV_ERR_FORMAT, "attribute 'digest' is not 16 hex digits");
+    st->digest = dg;
+    if (!rc) rc = h5_read_attr_int(&c, "/", "sweeps_done", &st->sweeps_done);
+    if (!rc) rc = h5_read_attr_int(&c, "/", "finished", &st->finished);
+    if (!rc) rc = h5_read_attr_double(&c, "/", "mu", &st->mu);
+    if (!rc && (st->sweeps_done < 0 || st->sweeps_done > SASNAV_REFINE_MAX_SWEEPS || st->finished < 0 ||
+                st->finished > 1 || !(st->mu > 0) || !isfinite(st->mu)))
+        rc = h5_fail(&c, SASNAV_ERR_FORMAT, "sweeps_done, finished or mu out of range");
+    int n = 0;
+    if (!rc) rc = poses_count(&c, "/poses", &n);
+    if (!rc && n < 3) rc = h5_fail(&c, SASNAV_ERR_FORMAT, "/poses: fewer than 3 poses");
+    hsize_t dims[1] = {0};
+    hid_t ds = H5I_INVALID_HID;
+    if (!rc) rc = h5_open_dataset(&c, "/scene", H5_COMPLEX, 1, dims, &ds);
+    if (ds != H5I_INVALID_HID) H5Dclose(ds);
+    if (!rc && dims[0] > (hsize_t)INT32_MAX) rc = h5_fail(&c, SASNAV_ERR_FORMAT, "/scene: too large");
+    size_t np = (size_t)dims[0];
+    double *w = NULL;
+    if (!rc) {
+        st->n_pings = n;
+        st->n_pixels = (int)np;
+        st->poses = malloc(sizeof *st->poses * n);
+        st->move_u = malloc(sizeof(double) * n);
+        st->move_v = malloc(sizeof(double) * n);
+        st->scene = malloc(sizeof *st->scene * np);
+        st->weights = malloc(sizeof *st->weights * np);
+        w = malloc(sizeof *w * np);
+        if (!st->poses || !st->move_u || !st->move_v || !st->scene || !st->weights || !w)
+            rc = h5_fail(&c, SASNAV_ERR_NOMEM, "cannot allocate the state");
+    }
+    hsize_t dn[1] = {(hsize_t)n}, dm[1] = {SASNAV_REFINE_MAX_SWEEPS + 1}, dr[1] = {SASNAV_REFINE_MAX_SWEEPS};
+    if (!rc) rc = poses_read(&c, "/poses", n, st->poses);
+    if (!rc) rc = h5_read_dataset_dims(&c, "/move_u", H5_REAL, 1, dn, st->move_u);
+    if (!rc) rc = h5_read_dataset_dims(&c, "/move_v", H5_REAL, 1, dn, st->move_v);
+    if (!rc) rc = h5_read_dataset_dims(&c, "/scene", H5_COMPLEX, 1, dims, st->scene);
+    if (!rc) rc = h5_read_dataset_dims(&c, "/weights", H5_REAL, 1, dims, w);
+    sasnav_refine_report *r = &st->report;
+    if (!rc) rc = h5_read_attr_int(&c, "/report", "sweeps", &r->sweeps);
+    if (!rc) rc = h5_read_attr_int(&c, "/report", "undone", &r->undone);
+    if (!rc) rc = h5_read_attr_double(&c, "/report", "seconds", &r->seconds);
+    if (!rc) rc = h5_read_dataset_dims(&c, "/report/misfit", H5_REAL, 1, dm, r->misfit);
+    if (!rc) rc = h5_read_dataset_dims(&c, "/report/rms_move", H5_REAL, 1, dr, r->rms_move);
+    if (!rc && r->sweeps != st->sweeps_done)
+        rc = h5_fail(&c, SASNAV_ERR_FORMAT, "report sweeps %d differ from sweeps_done %d", r->sweeps, st->sweeps_done);
+    for (int p = 0; !rc && p < n; p++)
+        if (!isfinite(st->move_u[p]) || !isfinite(st->move_v[p]))
+            rc = h5_fail(&c, SASNAV_ERR_FORMAT, "/move_u, /move_v: non-finite value at ping %d", p);
+    if (!rc && !poses_finite(n, st->poses)) rc = h5_fail(&c, SASNAV_ERR_FORMAT, "/poses: non-finite pose");
+    size_t bad = 0;
+    if (!rc && !floats_finite((const float *)st->scene, 2 * np, &bad))
+        rc = h5_fail(&c, SASNAV_ERR_FORMAT, "/scene: non-finite value at %zu", bad / 2);
+    for (size_t i = 0; !rc && i < np; i++) {
+        st->weights[i] = (float)w[i];
+        if (!(st->weights[i] > 0) || !isfinite(st->weights[i]))
+            rc = h5_fail(&c, SASNAV_ERR_FORMAT, "/weights: value %g at %zu is not positive and finite", w[i], i);
+    }
+    h5_end(&c);
+    free(w);
+    if (rc) sasnav_refine_state_free(st);
     return rc;
 }

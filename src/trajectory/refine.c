@@ -4,6 +4,7 @@
 
 #include "sasnav/error.h"
 #include "core/clock.h"
+#include "core/hash.h"
 
 #include <complex.h>
 #include <math.h>
@@ -285,6 +286,49 @@ static int check_opts(const sasnav_refine_opts *o)
     return SASNAV_OK;
 }
 
+void sasnav_refine_state_free(sasnav_refine_state *st)
+{
+    if (!st) return;
+    free(st->poses);
+    free(st->move_u);
+    free(st->move_v);
+    free(st->scene);
+    free(st->weights);
+    memset(st, 0, sizeof *st);
+}
+
+static uint64_t hash_d(uint64_t h, double v) { return sasnav_hash_double(h, v); }
+
+static uint64_t hash_poses(uint64_t h, const sasnav_ping_pose *p, int n)
+{
+    for (int i = 0; i < n; i++) {
+        const double v[6] = {p[i].tx.x, p[i].tx.y, p[i].tx.theta, p[i].array.x, p[i].array.y, p[i].array.theta};
+        for (int j = 0; j < 6; j++) h = hash_d(h, v[j]);
+    }
+    return h;
+}
+
+/* What a refinement's result depends on: the run (samples, geometry,
+ * system), the input poses, the options and the grid, field by field. */
+static uint64_t refine_digest(const sasnav_run *run, const sasnav_ping_pose *nav_in,
+                              const sasnav_refine_opts *o, const sasnav_grid *g)
+{
+    uint64_t h = SASNAV_HASH_INIT;
+    const int64_t ints[8] = {run->n_pings, run->array.n_rx, run->win.n_samples, run->sys.beam_pattern,
+                             o->sweeps, o->cg_first, o->cg_iterations, o->op.pad_samples};
+    h = sasnav_hash_bytes(h, ints, sizeof ints);
+    h = sasnav_hash_bytes(h, run->raw, sizeof(sasnav_cfloat) * (size_t)run->n_pings *
+                                           (size_t)run->array.n_rx * (size_t)run->win.n_samples);
+    const double d[25] = {run->sys.sound_speed, run->sys.f0, run->sys.bandwidth, run->sys.sample_rate,
+                          run->win.t0, run->array.rx_length, run->array.tx_length, run->array.rx_height,
+                          run->array.tx_height, o->damping, o->surge_range, o->sway_range, o->stop_move,
+                          o->sparsity, o->op.tolerance, o->op.oversampling, g->x0, g->dx, g->y0, g->dy,
+                          (double)g->nx, (double)g->ny, 0, 0, 0};
+    for (int j = 0; j < 25; j++) h = hash_d(h, d[j]);
+    for (int j = 0; j < run->array.n_rx; j++) h = hash_d(h, run->array.rx_u[j]);
+    return hash_poses(h, nav_in, run->n_pings);
+}
+
 int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const sasnav_refine_opts *opts,
                   sasnav_ping_pose *nav_out, sasnav_refine_report *report)
 {
@@ -345,10 +389,26 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const s
                   *ad = malloc(sizeof *ad * c.np);
     if (!px || !py || !cur || !c.op || !c.top || !c.tb || !c.td || !c.td2 || !s || !r || !d || !ad || !c.w)
         rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    uint64_t digest = refine_digest(run, nav_in, &o, &grid);
+    const sasnav_refine_state *rs = o.resume;
+    if (!rc && rs) {
+        if (rs->digest != digest || rs->n_pings != n || (size_t)rs->n_pixels != c.np)
+            rc = sasnav_set_error(SASNAV_ERR_ARG, "the refinement state to resume is of another run, input "
+                                  "navigation, grid or options");
+        else if (rs->sweeps_done < 0 || rs->sweeps_done > o.sweeps || !rs->poses || !rs->move_u ||
+                 !rs->move_v || !rs->scene || !rs->weights || !(rs->mu > 0) || !isfinite(rs->mu))
+            rc = sasnav_set_error(SASNAV_ERR_ARG, "the refinement state to resume is invalid");
+    }
     if (!rc) {
         for (size_t i = 0; i < c.np; i++) c.w[i] = 1.0f;
         sasnav_grid_points(&grid, (sasnav_pose){0, 0, 0}, px, py);
         memcpy(cur, nav_in, sizeof *cur * n);
+        if (rs) {
+            memcpy(cur, rs->poses, sizeof *cur * n);
+            memcpy(s, rs->scene, sizeof *s * c.np);
+            memcpy(c.w, rs->weights, sizeof *c.w * c.np);
+            c.mu = rs->mu;
+        }
     }
     for (int p = 0; p < n && !rc; p++) {
         rc = sasnav_op_create(&run->sys, &run->array, &run->win, (int)c.np, px, py, &oo, &c.op[p]);
@@ -363,12 +423,19 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const s
     if (!rc && (!mu_ || !mv_)) rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     if (!rc) {
         for (int p = 0; p < n; p++) mu_[p] = mv_[p] = 0;
+        if (rs) {
+            memcpy(mu_, rs->move_u, sizeof(double) * n);
+            memcpy(mv_, rs->move_v, sizeof(double) * n);
+            rep = rs->report;
+        }
     }
     sasnav_ping_pose *saved = malloc(sizeof *saved * n);
     double *saved_u = malloc(sizeof(double) * n), *saved_v = malloc(sizeof(double) * n);
     if (!rc && (!saved || !saved_u || !saved_v)) rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-    int first = 1;
-    for (int sw = 0; sw < o.sweeps && !rc; sw++) {
+    int first = !(rs && rs->sweeps_done > 0);
+    int sw0 = rs ? (rs->finished ? o.sweeps : rs->sweeps_done) : 0;
+    double t_prior = rs ? rs->report.seconds : 0; /* sweeps before the resumption */
+    for (int sw = sw0; sw < o.sweeps && !rc; sw++) {
         double sum_cost = 0, sum_move = 0, sum_before = 0;
         memcpy(saved, cur, sizeof *saved * n);
         memcpy(saved_u, mu_, sizeof(double) * n);
@@ -414,7 +481,14 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const s
         rep.misfit[sw + 1] = sum_cost / n;
         rep.rms_move[sw] = sqrt(sum_move / n);
         rep.sweeps = sw + 1;
-        if (rep.rms_move[sw] < o.stop_move) break;
+        int stop = rep.rms_move[sw] < o.stop_move;
+        if (o.sweep_done) {
+            sasnav_refine_state st = {digest, n, (int)c.np, sw + 1, stop || sw + 1 == o.sweeps, c.mu, cur,
+                                      mu_, mv_, s, c.w, rep};
+            st.report.seconds = t_prior + sasnav_now_seconds() - t0;
+            o.sweep_done(&st, o.sweep_user);
+        }
+        if (stop) break;
     }
     if (!rc) {
         /* Gauge: remove the common move. */
@@ -428,7 +502,7 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const s
         rep.mean_move_surge = au;
         rep.mean_move_sway = av;
         for (int p = 0; p < n; p++) nav_out[p] = moved(&cur[p], -au, -av);
-        rep.seconds = sasnav_now_seconds() - t0;
+        rep.seconds = t_prior + sasnav_now_seconds() - t0;
         if (report) *report = rep;
     }
     for (int p = 0; c.op && p < n; p++) sasnav_op_destroy(c.op[p]);

@@ -1,0 +1,51 @@
+/* fuzz_checkpoint: the input bytes are a checkpoint file (checkpoint.h):
+ * opened as `sasnav navigate`'s pair-record log (header, version, job,
+ * checksummed records; a torn tail is cut), then read as a refinement
+ * state (HDF5, `sasnav refine --checkpoint`). Contract: a documented code;
+ * an accepted log returns no more records than the file can hold, and
+ * takes an append; an accepted state is whole and finite. */
+#include "fuzz_common.h"
+#include "sasnav/checkpoint.h"
+
+#include <hdf5.h>
+#include <complex.h>
+#include <math.h>
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    static int init;
+    if (!init) {
+        init = 1;
+        H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+    }
+    const char *path = fz_path("ckpt.bin");
+    fz_write(path, data, size);
+    static const int allowed[] = {SASNAV_ERR_FORMAT, SASNAV_ERR_IO, SASNAV_ERR_NOMEM, 0};
+    sasnav_checkpoint *ck = NULL;
+    sasnav_pair_record *rec = NULL;
+    int n = -1;
+    int rc = sasnav_checkpoint_open(path, "sasnav navigate", &ck, &rec, &n);
+    fz_check_rc("sasnav_checkpoint_open", rc, allowed);
+    if (rc == SASNAV_OK) {
+        if (!ck || n < 0 || (size_t)n * sizeof(sasnav_pair_record) > size || (n > 0) != (rec != NULL)) abort();
+        sasnav_pair_record r;
+        memset(&r, 0, sizeof r);
+        if (sasnav_checkpoint_append(ck, &r) != SASNAV_OK) abort();
+        if (sasnav_checkpoint_count(ck) != n + 1) abort();
+        sasnav_checkpoint_close(ck, 0);
+    } else if (ck || rec || n != 0) {
+        abort();
+    }
+    free(rec);
+    fz_write(path, data, size);
+    sasnav_refine_state st;
+    rc = sasnav_refine_state_read(path, &st);
+    fz_check_rc("sasnav_refine_state_read", rc, allowed);
+    if (rc == SASNAV_OK) {
+        if (st.n_pings < 3 || st.n_pixels < 1 || !st.poses || !st.scene || !st.weights || !(st.mu > 0)) abort();
+        for (int i = 0; i < st.n_pixels; i++)
+            if (!(st.weights[i] > 0) || !isfinite(crealf(st.scene[i])) || !isfinite(cimagf(st.scene[i]))) abort();
+    }
+    sasnav_refine_state_free(&st);
+    return 0;
+}
