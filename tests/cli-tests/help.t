@@ -211,7 +211,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   rigidly onto the estimated first ping: the first pose is not observable).
   
   Every pair gets a verdict (ok, ambiguous, failed, no_overlap; one warning
-  line on stderr for each pair that is not ok). The pairs are then resolved
+  line on stderr for each pair that is not ok; DPCA's estimates are
+  'unchecked', one line for them all). The pairs are then resolved
   jointly over the run: a choice among each pair's candidates with a motion
   model of the vehicle and the run's aiding measurements (gyro, DVL: written
   by 'sasnav simulate --aiding' or by the user, docs/format.md), new estimates
