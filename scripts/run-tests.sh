@@ -16,4 +16,7 @@ UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build-asan --output-on-failure -j"$JOBS"
 # Coverage-guided fuzzing of every reader, briefly (docs/fuzzing.md; clang's
 # libFuzzer): fails on any crash, leak or hang found.
-sh scripts/fuzz.sh 15 run_h5 nav_h5 image_h5 config tank_dir airsas_dir cli_args
+# 30 s each. fuzz_run_h5_raw and fuzz_refine_state feed raw bytes to HDF5's
+# own parser, whose known faults (HDF5 1.10.8, docs/fuzzing.md) are not ours
+# and would make CI fail at random: they are fuzzed locally only.
+sh scripts/fuzz.sh 30 run_h5 nav_h5 image_h5 config tank_dir airsas_dir cli_args checkpoint
