@@ -45,7 +45,10 @@ static const char *help =
     "search ranges of the truth (sway within about a quarter wavelength).\n"
     "Where the run holds the truth, prints the rms surge and sway errors\n"
     "before and after (after the rigid motion that best fits the centroids\n"
-    "onto the true ones).\n"
+    "onto the true ones). The refinement is for scenes of a few strong\n"
+    "scatterers (the tank); where the scenes explain the pings poorly (mean\n"
+    "misfit above 0.3: an extended, speckle-like seabed) a warning says that\n"
+    "its result is unreliable.\n"
     "\n"
     "  --grid ...        scene grid (default: the nominal track's extent x range\n"
     "                    of interest +-0.35 m, 5 mm pixels); it must hold the\n"
@@ -171,6 +174,12 @@ int cmd_refine(int argc, char **argv)
             printf("rms error vs the truth (best rigid fit): surge %.3f -> %.3f mm, sway %.3f -> %.3f mm\n",
                    1e3 * a0, 1e3 * a1, 1e3 * b0, 1e3 * b1);
     }
+    if (rep.unreliable)
+        fprintf(stderr,
+                "sasnav refine: warning: the scenes explain the pings poorly (mean misfit %.3f > %.1f): the "
+                "refinement needs a scene of a few strong scatterers and is unreliable on this run; "
+                "the input navigation is likely better\n",
+                rep.misfit[0], SASNAV_REFINE_MISFIT_MAX);
     fprintf(stderr, "sasnav refine: %d pings, %d sweeps, %.1f s -> %s\n", n, rep.sweeps, rep.seconds, output);
     sasnav_run_free(run);
     free(nav);

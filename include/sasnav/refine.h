@@ -135,7 +135,20 @@ typedef struct {
                                                    undone (not counted) */
     double mean_move_surge, mean_move_sway;     /* m, the common move removed */
     double seconds;
+    int unreliable;                             /* 1: the input's mean misfit
+                                                   (misfit[0]) is above
+                                                   SASNAV_REFINE_MISFIT_MAX:
+                                                   the scenes do not explain
+                                                   the pings (an extended,
+                                                   speckle-like scene), and
+                                                   the moves are not to be
+                                                   trusted (docs/navigation.md) */
 } sasnav_refine_report;
+
+/* Mean misfit above which a refinement is reported unreliable: the tank's
+ * compact scenes sit at 0.004-0.12 (docs/navigation.md), paper-trajectory's
+ * extended speckle scene at 0.75. */
+#define SASNAV_REFINE_MISFIT_MAX 0.3
 
 /* The state of a refinement after a completed sweep. */
 struct sasnav_refine_state {

@@ -499,6 +499,7 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const s
         }
         au /= n;
         av /= n;
+        rep.unreliable = !(rep.misfit[0] <= SASNAV_REFINE_MISFIT_MAX);
         rep.mean_move_surge = au;
         rep.mean_move_sway = av;
         for (int p = 0; p < n; p++) nav_out[p] = moved(&cur[p], -au, -av);

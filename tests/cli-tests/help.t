@@ -282,7 +282,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   search ranges of the truth (sway within about a quarter wavelength).
   Where the run holds the truth, prints the rms surge and sway errors
   before and after (after the rigid motion that best fits the centroids
-  onto the true ones).
+  onto the true ones). The refinement is for scenes of a few strong
+  scatterers (the tank); where the scenes explain the pings poorly (mean
+  misfit above 0.3: an extended, speckle-like seabed) a warning says that
+  its result is unreliable.
   
     --grid ...        scene grid (default: the nominal track's extent x range
                       of interest +-0.35 m, 5 mm pixels); it must hold the
