@@ -55,6 +55,21 @@ int cli_parse_grid(const char *text, sasnav_grid *grid);
  * SIGXFSZ is ignored (app/signals.c). */
 void cli_install_signal_handlers(void);
 
+/* Progress of a long command: on a terminal a bar redrawn at every
+ * update; otherwise a line on stderr at most every 10 s (the environment
+ * variable SASNAV_PROGRESS_SECONDS sets the period; 0: every update) and
+ * a last one at the end when any was printed. Count, rate and time left
+ * (total 0: unknown, no time left). app/progress.c. */
+typedef struct {
+    const char *command, *unit;
+    double t0, last, interval;
+    int tty, lines, open_bar;
+} cli_progress;
+void cli_progress_init(cli_progress *p, const char *command, const char *unit);
+void cli_progress_update(cli_progress *p, int done, int total);
+/* Ends a bar's line (after the last update, before other output). */
+void cli_progress_end(cli_progress *p);
+
 /* --checkpoint FILE of the pair-estimating commands (navigate, validate):
  * the records in FILE are given to the navigation as opts->done, every
  * pair estimated is appended, and FILE is removed once the output is

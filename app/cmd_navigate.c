@@ -85,21 +85,13 @@ static const char *help =
     "  --json            machine-readable summary on stdout\n"
     "  -o FILE           output navigation file (HDF5)\n"
     "\n"
-    "A progress bar is drawn on stderr when it is a terminal.\n";
+    "Progress on stderr: a bar on a terminal, otherwise a line every 10 s\n"
+    "(pairs done, rate, time left; SASNAV_PROGRESS_SECONDS sets the period).\n";
 
-/* Progress bar on a terminal's stderr. */
-static void progress_bar(const sasnav_navigate_progress *pr, void *user)
+/* Progress (cli_progress: a bar on a terminal, lines otherwise). */
+static void progress_pairs(const sasnav_navigate_progress *pr, void *user)
 {
-    (void)user;
-    const int width = 30;
-    int filled = pr->total > 0 ? width * pr->done / pr->total : width;
-    char bar[64];
-    for (int j = 0; j < width; j++) bar[j] = j < filled ? '#' : '.';
-    bar[width] = '\0';
-    fprintf(stderr, "\rsasnav navigate: [%s] %d/%d pairs  %.1f s", bar, pr->done, pr->total,
-            pr->seconds);
-    if (pr->done == pr->total) fputc('\n', stderr);
-    fflush(stderr);
+    cli_progress_update(user, pr->done, pr->total);
 }
 
 static json_t *real_or_null(double v) { return isfinite(v) ? json_real(v) : json_null(); }
@@ -351,7 +343,10 @@ int cmd_navigate(int argc, char **argv)
     if (sasnav_pair_opts_check(&no.pair))
         return cli_usage("navigate", "%s", sasnav_last_error());
     no.nthreads = (int)threads;
-    if (isatty(STDERR_FILENO)) no.progress = progress_bar;
+    cli_progress prog;
+    cli_progress_init(&prog, "navigate", "pairs");
+    no.progress = progress_pairs;
+    no.progress_user = &prog;
 
     sasnav_run *run = NULL;
     int rc = sasnav_run_read(input, &run);
@@ -367,6 +362,7 @@ int cmd_navigate(int argc, char **argv)
     }
     sasnav_navigation nav;
     rc = sasnav_navigate(run, &no, &nav);
+    cli_progress_end(&prog);
     if (rc) {
         sasnav_run_free(run);
         rc = cli_fail("navigate", rc, "navigation of %s failed", input);

@@ -17,14 +17,17 @@
 /* --checkpoint: the state after every sweep, written whole (temporary
  * file and rename). */
 typedef struct {
-    const char *path;
+    const char *path; /* NULL: no checkpoint */
     int failed;
+    cli_progress progress;
+    int sweeps;
 } refine_ckpt;
 
 static void save_state(const sasnav_refine_state *st, void *user)
 {
     refine_ckpt *k = user;
-    if (k->failed) return;
+    cli_progress_update(&k->progress, st->sweeps_done, k->sweeps);
+    if (k->failed || !k->path) return;
     if (sasnav_refine_state_write(k->path, st)) {
         k->failed = 1;
         fprintf(stderr, "sasnav refine: warning: %s; going on without checkpointing\n", sasnav_last_error());
@@ -128,7 +131,10 @@ int cmd_refine(int argc, char **argv)
     }
     sasnav_refine_state resume;
     memset(&resume, 0, sizeof resume);
-    refine_ckpt ck = {checkpoint, 0};
+    refine_ckpt ck = {checkpoint, 0, {0}, ro.sweeps};
+    cli_progress_init(&ck.progress, "refine", "sweeps");
+    ro.sweep_done = save_state;
+    ro.sweep_user = &ck;
     if (checkpoint) {
         if (access(checkpoint, F_OK) == 0) {
             rc = sasnav_refine_state_read(checkpoint, &resume);
@@ -141,13 +147,12 @@ int cmd_refine(int argc, char **argv)
             fprintf(stderr, "sasnav refine: resuming from %s (%d sweeps done before)\n", checkpoint,
                     resume.sweeps_done);
         }
-        ro.sweep_done = save_state;
-        ro.sweep_user = &ck;
     }
     sasnav_ping_pose *out = malloc(sizeof *out * n);
     sasnav_refine_report rep;
     rc = out ? sasnav_refine(run, nav, &ro, out, &rep) : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     int refined = !rc;
+    cli_progress_end(&ck.progress);
     if (!rc) rc = sasnav_nav_write(output, n, out, run->truth);
     sasnav_refine_state_free(&resume);
     if (rc) {

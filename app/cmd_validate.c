@@ -71,15 +71,19 @@ static const char *help =
     "                     refinement and the images are redone). FILE is\n"
     "                     removed once the outputs are written\n"
     "\n"
-    "On a terminal, a status line on stderr counts the estimated pairs.\n";
+    "Progress on stderr (pairs estimated, rate): a status line on a terminal,\n"
+    "otherwise a line every 10 s (SASNAV_PROGRESS_SECONDS sets the period).\n";
 
-/* One status line on a terminal's stderr (the run takes minutes). */
+/* Pairs estimated over all phases (their total is not known ahead). */
+typedef struct {
+    cli_progress p;
+    int count;
+} validate_progress;
 static void progress_line(const sasnav_navigate_progress *pr, void *user)
 {
-    int *count = user;
-    if (pr->done > 0) (*count)++;
-    fprintf(stderr, "\rsasnav validate: %d pairs estimated (pair %d-%d)   ", *count, pr->p, pr->q);
-    fflush(stderr);
+    validate_progress *v = user;
+    if (pr->done > 0) v->count++;
+    cli_progress_update(&v->p, v->count, 0);
 }
 
 static json_t *num(double v) { return isfinite(v) ? json_real(v) : json_null(); }
@@ -398,15 +402,13 @@ int cmd_validate(int argc, char **argv)
     vo.refine_opts.nthreads = (int)threads;
     vo.op.nthreads = (int)threads;
 
-    int n_done = 0;
-    if (isatty(STDERR_FILENO)) {
-        vo.nav.progress = progress_line;
-        vo.nav.progress_user = &n_done;
-    }
+    validate_progress vp = {{0}, 0};
+    cli_progress_init(&vp.p, "validate", "pairs");
+    vo.nav.progress = progress_line;
+    vo.nav.progress_user = &vp;
     sasnav_run *run = NULL;
     int rc = sasnav_run_read(input, &run);
     if (rc) return cli_fail("validate", rc, "cannot read %s", input);
-    int bar = vo.nav.progress != NULL;
     cli_checkpoint ck;
     if (cli_checkpoint_begin(&ck, "validate", checkpoint, &vo.nav)) {
         sasnav_run_free(run);
@@ -415,7 +417,7 @@ int cmd_validate(int argc, char **argv)
     sasnav_validation v;
     rc = sasnav_validate(run, &vo, &v);
     sasnav_run_free(run);
-    if (bar) fputc('\n', stderr);
+    cli_progress_end(&vp.p);
     if (rc) {
         rc = cli_fail("validate", rc, "validation of %s failed", input);
         cli_checkpoint_end(&ck, 0);

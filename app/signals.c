@@ -1,4 +1,5 @@
-/* Signals of the sasnav tool: SIGINT, SIGTERM and SIGHUP remove the
+/* Signals of the sasnav tool: SIGINT, SIGTERM, SIGHUP and SIGPIPE (a
+ * reader of its output that went away, `sasnav ... | head`) remove the
  * temporary files of the outputs being written (previous outputs stay as
  * they were) and end the process as the signal would (exit status 128 + N
  * in a shell); SIGXFSZ (a file-size limit) is ignored so that the write
@@ -27,7 +28,7 @@ void cli_install_signal_handlers(void)
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_signal;
     sigemptyset(&sa.sa_mask);
-    const int sigs[] = {SIGINT, SIGTERM, SIGHUP};
+    const int sigs[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
     for (size_t k = 0; k < sizeof sigs / sizeof sigs[0]; k++) {
         struct sigaction old;
         /* keep "ignored" when the parent asked for it (nohup, background jobs) */

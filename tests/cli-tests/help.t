@@ -266,7 +266,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --json            machine-readable summary on stdout
     -o FILE           output navigation file (HDF5)
   
-  A progress bar is drawn on stderr when it is a terminal.
+  Progress on stderr: a bar on a terminal, otherwise a line every 10 s
+  (pairs done, rate, time left; SASNAV_PROGRESS_SECONDS sets the period).
 
   $ sasnav refine --help
   usage: sasnav refine run.h5 nav.h5 -o refined.h5 [--grid X0,X1,NX,Y0,Y1,NY]
@@ -376,7 +377,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                        refinement and the images are redone). FILE is
                        removed once the outputs are written
   
-  On a terminal, a status line on stderr counts the estimated pairs.
+  Progress on stderr (pairs estimated, rate): a status line on a terminal,
+  otherwise a line every 10 s (SASNAV_PROGRESS_SECONDS sets the period).
 
 Help goes to standard output; nothing on standard error, exit status 0.
 
