@@ -22,10 +22,10 @@ fail() {
     echo "cli_checkpoint: FAIL: $*" >&2
     FAILED=1
 }
-# Sanitized builds run ~20x slower: 6 pings there, 12 here; coarse
+# Sanitized builds run ~20x slower: 4 pings there, 12 here; coarse
 # iterations either way (what is tested is the bookkeeping, not accuracy).
 NP=12
-[ -n "${SASNAV_SANITIZED:-}" ] && NP=6
+[ -n "${SASNAV_SANITIZED:-}" ] && NP=4
 printf 'trajectory: {n_pings: %s}\n' "$NP" > "$T/c.yaml"
 "$CLI" simulate --preset paper-trajectory --config "$T/c.yaml" --seed 7 --snr 30 -o "$T/run.h5" 2> "$T/sim.err" ||
     { cat "$T/sim.err" >&2; fail "simulate"; exit 1; }
