@@ -43,6 +43,10 @@ const char *cli_nearest(const char *word, const char *const *candidates, int n);
  * an option missing its argument. Returns CLI_USAGE. */
 int cli_bad_option(const char *command, char **argv, const struct option *longopts);
 
+/* 1 when the two paths name the same file: the same text, or an existing
+ * file with the same device and inode. */
+int cli_same_file(const char *a, const char *b);
+
 /* Parses exactly n comma-separated finite doubles. Returns 0 on success. */
 int cli_parse_doubles(const char *text, int n, double *out);
 /* Parses a finite double / an int in [lo, hi]. Returns 0 on success. */

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 int cli_fail(const char *command, int rc, const char *fmt, ...)
 {
@@ -154,4 +155,11 @@ int cli_parse_grid(const char *text, sasnav_grid *grid)
         v[5] > 1e5)
         return -1;
     return sasnav_grid_make(v[0], v[1], (int)v[2], v[3], v[4], (int)v[5], grid) ? -1 : 0;
+}
+
+int cli_same_file(const char *a, const char *b)
+{
+    if (!strcmp(a, b)) return 1;
+    struct stat sa, sb;
+    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
 }

@@ -335,6 +335,8 @@ int cmd_navigate(int argc, char **argv)
     }
     if (optind != argc - 1) return cli_usage("navigate", "exactly one input run file is required");
     if (!output) return cli_usage("navigate", "an output file is required (-o nav.h5)");
+    if (checkpoint && cli_same_file(checkpoint, output))
+        return cli_usage("navigate", "--checkpoint and -o name the same file (%s)", output);
     if (have_first && anchor_truth)
         return cli_usage("navigate", "--first-pose and --anchor-truth exclude each other");
     const char *input = argv[optind];

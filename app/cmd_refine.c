@@ -111,6 +111,8 @@ int cmd_refine(int argc, char **argv)
     }
     if (optind != argc - 2) return cli_usage("refine", "a run file and a navigation file are required");
     if (!output) return cli_usage("refine", "an output file is required (-o FILE)");
+    if (checkpoint && cli_same_file(checkpoint, output))
+        return cli_usage("refine", "--checkpoint and -o name the same file (%s)", output);
     ro.sweeps = (int)sweeps;
     ro.nthreads = (int)threads;
     const char *run_path = argv[optind], *nav_path = argv[optind + 1];

@@ -85,3 +85,9 @@ a pointer to its help, exit status 2, nothing on standard output.
   $ sasnav validate run.h5 --k-min 0 -o v 2>&1
   sasnav validate: --k-min needs 1..127 (see 'sasnav validate --help')
   [2]
+  $ sasnav navigate run.h5 --checkpoint n.h5 -o n.h5 2>&1
+  sasnav navigate: --checkpoint and -o name the same file (n.h5) (see 'sasnav navigate --help')
+  [2]
+  $ sasnav refine run.h5 nav.h5 --checkpoint ./nav.h5 -o nav.h5 2>&1
+  sasnav refine: --checkpoint and -o name the same file (nav.h5) (see 'sasnav refine --help')
+  [2]
