@@ -73,6 +73,8 @@ void cli_progress_init(cli_progress *p, const char *command, const char *unit);
 void cli_progress_update(cli_progress *p, int done, int total);
 /* Ends a bar's line (after the last update, before other output). */
 void cli_progress_end(cli_progress *p);
+/* sasnav_ping_progress_fn (image.h) over a cli_progress (user). */
+void cli_ping_progress(int done, int total, void *user);
 
 /* --checkpoint FILE of the pair-estimating commands (navigate, validate):
  * the records in FILE are given to the navigation as opts->done, every

@@ -179,8 +179,12 @@ int cmd_image(int argc, char **argv)
     }
     if (ping >= 0)
         rc = image_one_ping(run, &nav[ping], (int)ping, &grid, &oo, (int)cgls, tikhonov, image);
-    else
-        rc = sasnav_backproject(run, nav, &grid, &oo, image);
+    else {
+        cli_progress prog;
+        cli_progress_init(&prog, "image", "pings");
+        rc = sasnav_backproject_progress(run, nav, &grid, &oo, image, cli_ping_progress, &prog);
+        cli_progress_end(&prog);
+    }
     free(own_nav);
     sasnav_run_free(run);
     if (rc) {

@@ -129,7 +129,10 @@ int cmd_simulate(int argc, char **argv)
     sasnav_op_default_opts(&oo);
     oo.nthreads = (int)threads;
     sasnav_run *run = NULL;
-    rc = sasnav_simulate(&sc, scene, &oo, &run);
+    cli_progress prog;
+    cli_progress_init(&prog, "simulate", "pings");
+    rc = sasnav_simulate_progress(&sc, scene, &oo, &run, cli_ping_progress, &prog);
+    cli_progress_end(&prog);
     sasnav_scene_free(scene);
     if (rc) return cli_fail("simulate", rc, "simulation failed");
     rc = sasnav_run_write(output, run);

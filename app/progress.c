@@ -83,3 +83,5 @@ void cli_progress_end(cli_progress *p)
     if (p->open_bar) fputc('\n', stderr);
     p->open_bar = 0;
 }
+
+void cli_ping_progress(int done, int total, void *user) { cli_progress_update(user, done, total); }

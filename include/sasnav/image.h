@@ -42,6 +42,15 @@ int sasnav_backproject(const sasnav_run *run, const sasnav_ping_pose *nav,
                        const sasnav_grid *grid, const sasnav_op_opts *opts,
                        sasnav_cfloat *image);
 
+/* Progress of a per-ping loop: `done` of `total` pings finished (called
+ * after each ping, on the calling thread). */
+typedef void (*sasnav_ping_progress_fn)(int done, int total, void *user);
+
+/* sasnav_backproject with a progress callback (may be NULL). */
+int sasnav_backproject_progress(const sasnav_run *run, const sasnav_ping_pose *nav,
+                                const sasnav_grid *grid, const sasnav_op_opts *opts,
+                                sasnav_cfloat *image, sasnav_ping_progress_fn progress, void *user);
+
 /* Options of the CGLS pseudo-inverse. */
 typedef struct {
     int iterations;   /* k, default 5 */

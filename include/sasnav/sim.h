@@ -133,6 +133,12 @@ int sasnav_simulate_raw(const sasnav_scenario *sc, const sasnav_scene *scene,
 int sasnav_simulate(const sasnav_scenario *sc, const sasnav_scene *scene,
                     const sasnav_op_opts *opts, sasnav_run **run);
 
+/* The same with a progress callback over the simulated pings (may be
+ * NULL; sasnav_ping_progress_fn: image.h). */
+int sasnav_simulate_progress(const sasnav_scenario *sc, const sasnav_scene *scene,
+                             const sasnav_op_opts *opts, sasnav_run **run,
+                             sasnav_ping_progress_fn progress, void *user);
+
 #ifdef __cplusplus
 }
 #endif

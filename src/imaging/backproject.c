@@ -12,6 +12,13 @@ int sasnav_backproject(const sasnav_run *run, const sasnav_ping_pose *nav,
                        const sasnav_grid *grid, const sasnav_op_opts *opts,
                        sasnav_cfloat *image)
 {
+    return sasnav_backproject_progress(run, nav, grid, opts, image, NULL, NULL);
+}
+
+int sasnav_backproject_progress(const sasnav_run *run, const sasnav_ping_pose *nav,
+                                const sasnav_grid *grid, const sasnav_op_opts *opts,
+                                sasnav_cfloat *image, sasnav_ping_progress_fn progress, void *user)
+{
     if (!run || !nav || !grid || !image)
         return sasnav_set_error(SASNAV_ERR_ARG, "NULL backprojection argument");
     int rc = sasnav_grid_check(grid);
@@ -34,6 +41,7 @@ int sasnav_backproject(const sasnav_run *run, const sasnav_ping_pose *nav,
     for (int p = 0; p < run->n_pings && !rc; p++) {
         rc = sasnav_op_set_geometry(op, &nav[p]);
         if (!rc) rc = sasnav_op_adjoint_add(op, sasnav_run_ping(run, p), image);
+        if (!rc && progress) progress(p + 1, run->n_pings, user);
     }
     sasnav_op_destroy(op);
     return rc;

@@ -6,9 +6,20 @@
 #include <math.h>
 #include <stdlib.h>
 
+static int simulate_raw(const sasnav_scenario *sc, const sasnav_scene *scene,
+                        const sasnav_ping_pose *truth, sasnav_run *run,
+                        const sasnav_op_opts *opts, sasnav_ping_progress_fn progress, void *user);
+
 int sasnav_simulate_raw(const sasnav_scenario *sc, const sasnav_scene *scene,
                         const sasnav_ping_pose *truth, sasnav_run *run,
                         const sasnav_op_opts *opts)
+{
+    return simulate_raw(sc, scene, truth, run, opts, NULL, NULL);
+}
+
+static int simulate_raw(const sasnav_scenario *sc, const sasnav_scene *scene,
+                        const sasnav_ping_pose *truth, sasnav_run *run,
+                        const sasnav_op_opts *opts, sasnav_ping_progress_fn progress, void *user)
 {
     if (!sc || !scene || !truth || !run || !run->raw)
         return sasnav_set_error(SASNAV_ERR_ARG, "NULL simulation argument");
@@ -20,6 +31,7 @@ int sasnav_simulate_raw(const sasnav_scenario *sc, const sasnav_scene *scene,
     for (int p = 0; p < run->n_pings && !rc; p++) {
         rc = sasnav_op_set_geometry(op, &truth[p]);
         if (!rc) rc = sasnav_op_forward(op, scene->amp, sasnav_run_ping(run, p));
+        if (!rc && progress) progress(p + 1, run->n_pings, user);
     }
     sasnav_op_destroy(op);
     if (rc) return rc;
@@ -59,6 +71,13 @@ static int scenario_scene(const sasnav_scenario *sc, sasnav_scene **scene)
 int sasnav_simulate(const sasnav_scenario *sc, const sasnav_scene *scene,
                     const sasnav_op_opts *opts, sasnav_run **out)
 {
+    return sasnav_simulate_progress(sc, scene, opts, out, NULL, NULL);
+}
+
+int sasnav_simulate_progress(const sasnav_scenario *sc, const sasnav_scene *scene,
+                             const sasnav_op_opts *opts, sasnav_run **out,
+                             sasnav_ping_progress_fn progress, void *user)
+{
     if (!sc || !out) return sasnav_set_error(SASNAV_ERR_ARG, "NULL simulation argument");
     *out = NULL;
     int rc = sasnav_scenario_check(sc);
@@ -80,7 +99,7 @@ int sasnav_simulate(const sasnav_scenario *sc, const sasnav_scene *scene,
         rc = scenario_scene(sc, &own);
         scene = own;
     }
-    if (!rc) rc = sasnav_simulate_raw(sc, scene, run->truth, run, opts);
+    if (!rc) rc = simulate_raw(sc, scene, run->truth, run, opts, progress, user);
     if (!rc && sc->aiding.enabled) rc = sasnav_simulate_aiding(&sc->aiding, sc->traj.speed, run);
     sasnav_scene_free(own);
     if (rc) {
