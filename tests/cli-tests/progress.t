@@ -13,3 +13,10 @@ With the default period a short job prints no progress line:
   $ sasnav navigate run.h5 --method aiding -o p.h5 2>&1 >/dev/null | grep -c "pairs/s"
   0
   [1]
+
+simulate and image count pings:
+
+  $ SASNAV_PROGRESS_SECONDS=0 sasnav simulate --preset point -o s.h5 2>&1 | grep "^sasnav simulate: 17/17"
+  sasnav simulate: 17/17 pings, * pings/s (glob)
+  $ SASNAV_PROGRESS_SECONDS=0 sasnav image run.h5 -o i.h5 2>&1 | grep "^sasnav image: 1/17"
+  sasnav image: 1/17 pings, * pings/s, * left (glob)
