@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <limits.h>
 #include <sys/stat.h>
 
 int cli_fail(const char *command, int rc, const char *fmt, ...)
@@ -157,9 +158,32 @@ int cli_parse_grid(const char *text, sasnav_grid *grid)
     return sasnav_grid_make(v[0], v[1], (int)v[2], v[3], v[4], (int)v[5], grid) ? -1 : 0;
 }
 
+/* "realpath(directory)/name" of a path whose file need not exist; 0 when
+ * the directory cannot be resolved. */
+static int canonical(const char *path, char *out, size_t size)
+{
+    char dir[PATH_MAX];
+    const char *slash = strrchr(path, '/');
+    const char *name = slash ? slash + 1 : path;
+    size_t n = slash ? (size_t)(slash - path) : 0;
+    if (n >= sizeof dir) return 0;
+    if (slash && n == 0) strcpy(dir, "/");
+    else if (slash) {
+        memcpy(dir, path, n);
+        dir[n] = '\0';
+    } else {
+        strcpy(dir, ".");
+    }
+    char real[PATH_MAX];
+    if (!realpath(dir, real)) return 0;
+    return snprintf(out, size, "%s/%s", real, name) < (int)size;
+}
+
 int cli_same_file(const char *a, const char *b)
 {
     if (!strcmp(a, b)) return 1;
     struct stat sa, sb;
-    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    if (stat(a, &sa) == 0 && stat(b, &sb) == 0) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    char ca[PATH_MAX + 256], cb[PATH_MAX + 256];
+    return canonical(a, ca, sizeof ca) && canonical(b, cb, sizeof cb) && !strcmp(ca, cb);
 }

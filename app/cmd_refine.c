@@ -153,7 +153,7 @@ int cmd_refine(int argc, char **argv)
     sasnav_ping_pose *out = malloc(sizeof *out * n);
     sasnav_refine_report rep;
     rc = out ? sasnav_refine(run, nav, &ro, out, &rep) : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-    int refined = !rc;
+    int refined = !rc, rc_lib = rc;
     cli_progress_end(&ck.progress);
     if (!rc) rc = sasnav_nav_write(output, n, out, run->truth);
     sasnav_refine_state_free(&resume);
@@ -163,7 +163,9 @@ int cmd_refine(int argc, char **argv)
         free(out);
         rc = refined ? cli_fail("refine", rc, "cannot write %s", output)
                      : cli_fail("refine", rc, "refinement of %s failed", nav_path);
-        if (checkpoint && !ck.failed && access(checkpoint, F_OK) == 0)
+        if (checkpoint && !refined && ro.resume && rc_lib == SASNAV_ERR_ARG)
+            fprintf(stderr, "sasnav refine: remove %s to start again\n", checkpoint);
+        else if (checkpoint && !ck.failed && access(checkpoint, F_OK) == 0)
             fprintf(stderr, "sasnav refine: state kept in %s: run the same command again to resume\n", checkpoint);
         return rc;
     }

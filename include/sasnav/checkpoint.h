@@ -39,7 +39,8 @@ typedef struct sasnav_checkpoint sasnav_checkpoint;
  * job: its records up to the first torn or corrupt one are returned in
  * *records (*n_records entries; free() it; NULL when 0) and the file is
  * cut after them, so that appended records follow them. When it does not
- * exist it is created (mode 0644) with the header, *n_records = 0.
+ * exist, or is empty (a process killed before it wrote the header), it is
+ * started with the header (created with mode 0644), *n_records = 0.
  * Errors: SASNAV_ERR_ARG (NULL arguments, job too long), SASNAV_ERR_IO
  * (cannot create, read, lock or write; in use by another process),
  * SASNAV_ERR_FORMAT (not a sasnav checkpoint, another version or layout,

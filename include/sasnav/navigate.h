@@ -93,8 +93,9 @@ typedef struct {
  * names. The key is a 64-bit hash of what the pair's first estimate
  * depends on: the two pings' samples and nominal poses, the run's
  * Tx-array offset (or the per-ping offsets in use), range of interest,
- * sound speed, carrier, band, sample rate, window, beam-pattern switch and
- * array (receiver positions, apertures, heights), the estimation method and
+ * sound speed, carrier, band, sample rate, pulse taper, spreading model,
+ * window, beam-pattern switch and array (receiver positions, apertures,
+ * heights), for DPCA the ping spacing and q - p, the estimation method and
  * every option of its estimator (pair or dpca) but the thread counts.
  * Not covered: the code itself (keep records per sasnav version: the
  * checkpoint files do) and the aiding measurements, which the first

@@ -7,6 +7,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #define SASNAV_HASH_INIT UINT64_C(14695981039346656037)
 
@@ -18,6 +19,23 @@ static inline uint64_t sasnav_hash_bytes(uint64_t h, const void *data, size_t n)
         h *= UINT64_C(1099511628211);
     }
     return h;
+}
+
+/* The same mixing over 8-byte words (then the tail bytewise): for bulk
+ * data such as ping samples, 8 times fewer steps. Not the same value as
+ * sasnav_hash_bytes of the same bytes. */
+static inline uint64_t sasnav_hash_words(uint64_t h, const void *data, size_t n)
+{
+    const unsigned char *b = data;
+    size_t k = n / 8;
+    for (size_t i = 0; i < k; i++) {
+        uint64_t w;
+        memcpy(&w, b + 8 * i, 8);
+        h ^= w;
+        h *= UINT64_C(1099511628211);
+        h ^= h >> 29;
+    }
+    return sasnav_hash_bytes(h, b + 8 * k, n - 8 * k);
 }
 
 static inline uint64_t sasnav_hash_double(uint64_t h, double v)

@@ -76,6 +76,7 @@ static int read_all(int fd, const char *path, unsigned char **buf, size_t *len)
     unsigned char *b = malloc(n + 1);
     if (!b) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory reading checkpoint %s", path);
     size_t got = 0;
+    errno = 0;
     while (got < n) {
         ssize_t k = pread(fd, b + got, n - got, (off_t)got);
         if (k < 0 && errno == EINTR) continue;
@@ -83,8 +84,10 @@ static int read_all(int fd, const char *path, unsigned char **buf, size_t *len)
         got += (size_t)k;
     }
     if (got != n) {
+        int e = errno;
         free(b);
-        return sasnav_set_error(SASNAV_ERR_IO, "cannot read checkpoint %s: %s", path, strerror(errno));
+        return sasnav_set_error(SASNAV_ERR_IO, "cannot read checkpoint %s: %s", path,
+                                e ? strerror(e) : "shorter than its size");
     }
     *buf = b;
     *len = n;
@@ -181,6 +184,10 @@ int sasnav_checkpoint_open(const char *path, const char *job, sasnav_checkpoint 
                  : sasnav_set_error(SASNAV_ERR_IO, "cannot lock checkpoint %s: %s", path, strerror(errno));
         goto fail;
     }
+    /* An empty file: one this function created and was killed before it
+     * wrote the header (nothing to lose): started again. */
+    struct stat st;
+    if (!created && fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size == 0) created = 2;
     if (created) {
         if (write_all(fd, header, hlen) || fdatasync(fd)) {
             rc = sasnav_set_error(SASNAV_ERR_IO, "cannot write checkpoint %s: %s", path, strerror(errno));
@@ -216,7 +223,9 @@ int sasnav_checkpoint_open(const char *path, const char *job, sasnav_checkpoint 
     return SASNAV_OK;
 fail:
     if (fd >= 0) {
-        if (created) unlink(path);
+        if (created == 1) unlink(path);
+        else if (created == 2 && ftruncate(fd, 0)) { /* leave it empty as it was */
+        }
         close(fd);
     }
     free(header);

@@ -156,15 +156,22 @@ static uint64_t pair_key(const nav_ctx *ctx, int p, int q)
     const sasnav_run *run = ctx->run;
     size_t n = (size_t)run->array.n_rx * (size_t)run->win.n_samples;
     uint64_t h = ctx->digest;
-    int head[4] = {(int)ctx->opts->method, run->array.n_rx, run->win.n_samples, run->sys.beam_pattern};
+    int head[6] = {(int)ctx->opts->method, run->array.n_rx, run->win.n_samples, run->sys.beam_pattern,
+                   (int)run->sys.taper, (int)run->sys.attenuation};
     h = sasnav_hash_bytes(h, head, sizeof head);
+    if (ctx->opts->method == SASNAV_METHOD_DPCA) {
+        /* DPCA's nominal step is (q - p) ping spacings, not the poses'. */
+        const int steps = q - p;
+        h = sasnav_hash_bytes(h, &steps, sizeof steps);
+        h = sasnav_hash_double(h, run->ping_spacing);
+    }
     const double sys[6] = {run->sys.sound_speed, run->sys.f0, run->sys.bandwidth,
                            run->sys.sample_rate, run->win.t0, run->range_of_interest};
     for (int j = 0; j < 6; j++) h = sasnav_hash_double(h, sys[j]);
     const int pings[2] = {p, q};
     for (int k = 0; k < 2; k++) {
         int i = pings[k];
-        h = sasnav_hash_bytes(h, sasnav_run_ping(run, i), n * sizeof(sasnav_cfloat));
+        h = sasnav_hash_words(h, sasnav_run_ping(run, i), n * sizeof(sasnav_cfloat));
         const sasnav_ping_pose *a = &run->nav[i];
         const double v[6] = {a->tx.x, a->tx.y, a->tx.theta, a->array.x, a->array.y, a->array.theta};
         for (int j = 0; j < 6; j++) h = sasnav_hash_double(h, v[j]);

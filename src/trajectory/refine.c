@@ -314,10 +314,11 @@ static uint64_t refine_digest(const sasnav_run *run, const sasnav_ping_pose *nav
                               const sasnav_refine_opts *o, const sasnav_grid *g)
 {
     uint64_t h = SASNAV_HASH_INIT;
-    const int64_t ints[8] = {run->n_pings, run->array.n_rx, run->win.n_samples, run->sys.beam_pattern,
-                             o->sweeps, o->cg_first, o->cg_iterations, o->op.pad_samples};
+    const int64_t ints[10] = {run->n_pings, run->array.n_rx, run->win.n_samples, run->sys.beam_pattern,
+                              o->sweeps, o->cg_first, o->cg_iterations, o->op.pad_samples,
+                              (int64_t)run->sys.taper, (int64_t)run->sys.attenuation};
     h = sasnav_hash_bytes(h, ints, sizeof ints);
-    h = sasnav_hash_bytes(h, run->raw, sizeof(sasnav_cfloat) * (size_t)run->n_pings *
+    h = sasnav_hash_words(h, run->raw, sizeof(sasnav_cfloat) * (size_t)run->n_pings *
                                            (size_t)run->array.n_rx * (size_t)run->win.n_samples);
     const double d[25] = {run->sys.sound_speed, run->sys.f0, run->sys.bandwidth, run->sys.sample_rate,
                           run->win.t0, run->array.rx_length, run->array.tx_length, run->array.rx_height,

@@ -91,3 +91,6 @@ a pointer to its help, exit status 2, nothing on standard output.
   $ sasnav refine run.h5 nav.h5 --checkpoint ./nav.h5 -o nav.h5 2>&1
   sasnav refine: --checkpoint and -o name the same file (nav.h5) (see 'sasnav refine --help')
   [2]
+  $ sasnav navigate run.h5 --checkpoint ./new.h5 -o emptydir/../new.h5 2>&1
+  sasnav navigate: --checkpoint and -o name the same file (emptydir/../new.h5) (see 'sasnav navigate --help')
+  [2]
