@@ -5,6 +5,8 @@
 #ifndef SASNAV_HASH_H
 #define SASNAV_HASH_H
 
+#include "sasnav/geometry.h"
+
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
@@ -42,6 +44,22 @@ static inline uint64_t sasnav_hash_double(uint64_t h, double v)
 {
     if (v == 0) v = 0; /* -0 and +0 alike */
     return sasnav_hash_bytes(h, &v, sizeof v);
+}
+
+static inline uint64_t sasnav_hash_doubles(uint64_t h, const double *v, int n)
+{
+    for (int j = 0; j < n; j++) h = sasnav_hash_double(h, v[j]);
+    return h;
+}
+
+/* Ping poses, field by field (tx x, y, theta, then array x, y, theta). */
+static inline uint64_t sasnav_hash_ping_poses(uint64_t h, const sasnav_ping_pose *p, int n)
+{
+    for (int i = 0; i < n; i++) {
+        const double v[6] = {p[i].tx.x, p[i].tx.y, p[i].tx.theta, p[i].array.x, p[i].array.y, p[i].array.theta};
+        h = sasnav_hash_doubles(h, v, 6);
+    }
+    return h;
 }
 
 #endif

@@ -99,12 +99,6 @@ typedef struct {
     uint64_t digest;          /* options_digest: the seed of every pair key */
 } nav_ctx;
 
-static uint64_t hash_doubles(uint64_t h, const double *v, int n)
-{
-    for (int j = 0; j < n; j++) h = sasnav_hash_double(h, v[j]);
-    return h;
-}
-
 static uint64_t hash_ints(uint64_t h, const int *v, int n)
 {
     for (int j = 0; j < n; j++) {
@@ -122,9 +116,9 @@ static uint64_t options_digest(const sasnav_run *run, const sasnav_navigate_opts
     uint64_t h = SASNAV_HASH_INIT;
     const sasnav_array *a = &run->array;
     h = hash_ints(h, &a->n_rx, 1);
-    h = hash_doubles(h, a->rx_u, a->n_rx);
+    h = sasnav_hash_doubles(h, a->rx_u, a->n_rx);
     const double ad[4] = {a->rx_length, a->tx_length, a->rx_height, a->tx_height};
-    h = hash_doubles(h, ad, 4);
+    h = sasnav_hash_doubles(h, ad, 4);
     const int mi[1] = {(int)o->method};
     h = hash_ints(h, mi, 1);
     if (o->method == SASNAV_METHOD_SUBSPACE) {
@@ -139,13 +133,13 @@ static uint64_t options_digest(const sasnav_run *run, const sasnav_navigate_opts
                                po->error_extent, po->error_taper, po->min_overlap,
                                po->verdict_eta_max, po->verdict_margin_min, po->op.tolerance,
                                po->op.oversampling, 0, 0, 0, 0, 0, 0};
-        h = hash_doubles(h, pd, 31);
+        h = sasnav_hash_doubles(h, pd, 31);
     } else if (o->method == SASNAV_METHOD_DPCA) {
         const sasnav_dpca_opts *d = &o->dpca;
         const int di[4] = {d->upsampling, d->use_phase, d->unwrap, d->bistatic_correction};
         h = hash_ints(h, di, 4);
         const double dd[4] = {d->range, d->half_width, d->max_sway, d->min_coherence};
-        h = hash_doubles(h, dd, 4);
+        h = sasnav_hash_doubles(h, dd, 4);
     }
     return h;
 }
@@ -172,9 +166,7 @@ static uint64_t pair_key(const nav_ctx *ctx, int p, int q)
     for (int k = 0; k < 2; k++) {
         int i = pings[k];
         h = sasnav_hash_words(h, sasnav_run_ping(run, i), n * sizeof(sasnav_cfloat));
-        const sasnav_ping_pose *a = &run->nav[i];
-        const double v[6] = {a->tx.x, a->tx.y, a->tx.theta, a->array.x, a->array.y, a->array.theta};
-        for (int j = 0; j < 6; j++) h = sasnav_hash_double(h, v[j]);
+        h = sasnav_hash_ping_poses(h, &run->nav[i], 1);
         h = sasnav_hash_double(h, ctx->lags ? ctx->lags[i] : run->tx_lag);
     }
     return h ? h : 1; /* 0 means "no key" in the progress report */

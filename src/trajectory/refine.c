@@ -297,17 +297,6 @@ void sasnav_refine_state_free(sasnav_refine_state *st)
     memset(st, 0, sizeof *st);
 }
 
-static uint64_t hash_d(uint64_t h, double v) { return sasnav_hash_double(h, v); }
-
-static uint64_t hash_poses(uint64_t h, const sasnav_ping_pose *p, int n)
-{
-    for (int i = 0; i < n; i++) {
-        const double v[6] = {p[i].tx.x, p[i].tx.y, p[i].tx.theta, p[i].array.x, p[i].array.y, p[i].array.theta};
-        for (int j = 0; j < 6; j++) h = hash_d(h, v[j]);
-    }
-    return h;
-}
-
 /* What a refinement's result depends on: the run (samples, geometry,
  * system), the input poses, the options and the grid, field by field. */
 static uint64_t refine_digest(const sasnav_run *run, const sasnav_ping_pose *nav_in,
@@ -325,9 +314,9 @@ static uint64_t refine_digest(const sasnav_run *run, const sasnav_ping_pose *nav
                           run->array.tx_height, o->damping, o->surge_range, o->sway_range, o->stop_move,
                           o->sparsity, o->op.tolerance, o->op.oversampling, g->x0, g->dx, g->y0, g->dy,
                           (double)g->nx, (double)g->ny, 0, 0, 0};
-    for (int j = 0; j < 25; j++) h = hash_d(h, d[j]);
-    for (int j = 0; j < run->array.n_rx; j++) h = hash_d(h, run->array.rx_u[j]);
-    return hash_poses(h, nav_in, run->n_pings);
+    h = sasnav_hash_doubles(h, d, 25);
+    h = sasnav_hash_doubles(h, run->array.rx_u, run->array.n_rx);
+    return sasnav_hash_ping_poses(h, nav_in, run->n_pings);
 }
 
 int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const sasnav_refine_opts *opts,
