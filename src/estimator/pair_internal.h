@@ -35,6 +35,9 @@ typedef struct {
     } kept[PAIR_KEPT];
     int n_kept, next_kept;
     sasnav_cfloat *rho_p, *rho_q, *psi_p, *psi_q, *tmp, *data_tmp, *cgls_work;
+    /* Second set of projection buffers: psi_q's chain runs beside psi_p's
+     * (intersect_both). */
+    sasnav_cfloat *tmp2, *data_tmp2, *cgls_work2;
     double *mod_p, *mod_q, *blur_tmp;
     float *window;
     double rho_p_norm;
