@@ -55,6 +55,26 @@ int cli_parse_int(const char *text, long lo, long hi, long *out);
 /* Parses X0,X1,NX,Y0,Y1,NY into a grid. */
 int cli_parse_grid(const char *text, sasnav_grid *grid);
 
+/* MPI (app/mpi.c). `mpirun -np N sasnav navigate|image ...` runs N ranks
+ * of one job; the other commands refuse more than one. Only rank 0 writes
+ * files and prints results (the other ranks' stdout goes to /dev/null).
+ * Without MPI in the build, or when not started by an MPI launcher: rank
+ * 0 of 1 and no MPI call.
+ * cli_mpi_init: returns 0, or 1 after a message (MPI failed, or several
+ * processes without MPI support). */
+int cli_mpi_init(int *argc, char ***argv);
+void cli_mpi_finalize(void);
+int cli_mpi_rank(void);
+int cli_mpi_size(void);
+/* Collective: 1 when any rank passes failed != 0; *rank0_failed (may be
+ * NULL) tells whether rank 0 did (it then reports the failure; a rank
+ * reports its own only when rank 0 has nothing to say). */
+int cli_mpi_any(int failed, int *rank0_failed);
+/* Collective: the n bytes of every rank, concatenated in rank order, at
+ * rank 0 (*all malloc'd, *n_all bytes; NULL elsewhere). Returns 0, or 1
+ * on every rank when it could not be done (out of memory). */
+int cli_mpi_gather(const void *mine, size_t n, void **all, size_t *n_all);
+
 /* SIGINT / SIGTERM / SIGHUP remove partial outputs, then end the process;
  * SIGXFSZ is ignored (app/signals.c). */
 void cli_install_signal_handlers(void);

@@ -17,7 +17,10 @@ int cli_fail(const char *command, int rc, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    fprintf(stderr, "sasnav %s: %s", command, msg);
+    if (cli_mpi_size() > 1 && cli_mpi_rank() != 0)
+        fprintf(stderr, "sasnav %s (rank %d of %d): %s", command, cli_mpi_rank(), cli_mpi_size(), msg);
+    else
+        fprintf(stderr, "sasnav %s: %s", command, msg);
     if (rc < 0) {
         const char *detail = sasnav_last_error();
         if (!detail || !detail[0]) detail = sasnav_strerror(rc);
@@ -36,6 +39,8 @@ int cli_fail(const char *command, int rc, const char *fmt, ...)
 
 int cli_usage(const char *command, const char *fmt, ...)
 {
+    /* Every rank of an MPI job parses the same command line: rank 0 says it. */
+    if (cli_mpi_rank() != 0) return CLI_USAGE;
     fprintf(stderr, "sasnav %s: ", command);
     va_list ap;
     va_start(ap, fmt);

@@ -29,7 +29,12 @@ static const char *help =
     "  --cgls K          with --ping: the regularised pseudo-inverse of the ping\n"
     "                    by K CGLS iterations instead of its backprojection\n"
     "  --tikhonov L      Tikhonov weight of the CGLS inverse (default 0)\n"
-    "  -o FILE           output image file (HDF5)\n";
+    "  -o FILE           output image file (HDF5)\n"
+    "\n"
+    "Any grid size: the backprojection runs in tiles of rows (about 180 MB of\n"
+    "operator each), the run read ping by ping. 'mpirun -np N sasnav image ...'\n"
+    "gives each process a band of rows; rank 0 writes the same image as one\n"
+    "process, bit for bit (docs/survey.md).\n";
 
 static int default_grid(const sasnav_run *run, const sasnav_ping_pose *nav, sasnav_grid *g)
 {
@@ -66,12 +71,16 @@ static int image_one_ping(const sasnav_run *run, const sasnav_ping_pose *pose, i
     free(x);
     free(y);
     if (!rc) rc = sasnav_op_set_geometry(op, pose);
+    const sasnav_cfloat *data = NULL;
+    sasnav_cfloat *buf = malloc(sizeof *buf * sasnav_run_ping_size(run));
+    if (!rc) rc = buf ? sasnav_run_get_ping(run, p, buf, &data) : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     if (!rc && k > 0) {
         sasnav_cgls_opts co = {k, tikhonov};
-        rc = sasnav_cgls(op, sasnav_run_ping(run, p), &co, image, NULL);
+        rc = sasnav_cgls(op, data, &co, image, NULL);
     } else if (!rc) {
-        rc = sasnav_op_adjoint(op, sasnav_run_ping(run, p), image);
+        rc = sasnav_op_adjoint(op, data, image);
     }
+    free(buf);
     sasnav_op_destroy(op);
     return rc;
 }
@@ -131,9 +140,18 @@ int cmd_image(int argc, char **argv)
     if (gridtext && cli_parse_grid(gridtext, &grid))
         return cli_usage("image", "--grid needs X0,X1,NX,Y0,Y1,NY with X1 > X0, Y1 > Y0, NX, NY >= 2");
 
+    int ranks = cli_mpi_size(), rank = cli_mpi_rank(), rank0_failed = 0;
+    if (ranks > 1 && ping >= 0)
+        return cli_usage("image", "--ping images one ping in one process, not in the %d of mpirun", ranks);
+
+    /* Streamed: the pings are read one at a time (per tile of the grid). */
     sasnav_run *run = NULL;
-    int rc = sasnav_run_read(input, &run);
-    if (rc) return cli_fail("image", rc, "cannot read %s", input);
+    int rc = sasnav_run_open(input, &run);
+    if (cli_mpi_any(rc != 0, &rank0_failed)) {
+        if (rc && (rank == 0 || !rank0_failed)) return cli_fail("image", rc, "cannot read %s", input);
+        sasnav_run_free(run);
+        return CLI_FAILURE;
+    }
     sasnav_ping_pose *nav = run->nav, *own_nav = NULL;
     if (use_truth) {
         if (!run->truth) {
@@ -161,7 +179,16 @@ int cmd_image(int argc, char **argv)
         sasnav_run_free(run);
         return cli_fail("image", rc, "default grid");
     }
-    sasnav_cfloat *image = malloc(sizeof(sasnav_cfloat) * (size_t)grid.nx * grid.ny);
+    /* Under mpirun each rank makes a band of rows; rank 0 gathers them. */
+    int row0 = (int)((long)grid.ny * rank / ranks), row1 = (int)((long)grid.ny * (rank + 1) / ranks);
+    if (ranks > grid.ny) {
+        free(own_nav);
+        sasnav_run_free(run);
+        return rank == 0 ? cli_fail("image", 0, "%d processes for %d image rows: use at most one per row",
+                                    ranks, grid.ny)
+                         : CLI_FAILURE;
+    }
+    sasnav_cfloat *image = malloc(sizeof(sasnav_cfloat) * (size_t)grid.nx * (size_t)(row1 - row0));
     if (!image) {
         free(own_nav);
         sasnav_run_free(run);
@@ -182,11 +209,26 @@ int cmd_image(int argc, char **argv)
     else {
         cli_progress prog;
         cli_progress_init(&prog, "image", "pings");
-        rc = sasnav_backproject_progress(run, nav, &grid, &oo, image, cli_ping_progress, &prog);
+        rc = sasnav_backproject_rows(run, nav, &grid, row0, row1, &oo, image, cli_ping_progress, &prog);
         cli_progress_end(&prog);
     }
     free(own_nav);
     sasnav_run_free(run);
+    if (ranks > 1) {
+        if (cli_mpi_any(rc != 0, &rank0_failed)) {
+            free(image);
+            return rc && (rank == 0 || !rank0_failed) ? cli_fail("image", rc, "backprojection failed")
+                                                      : CLI_FAILURE;
+        }
+        void *all = NULL;
+        size_t bytes = 0;
+        rc = cli_mpi_gather(image, sizeof(sasnav_cfloat) * (size_t)grid.nx * (size_t)(row1 - row0), &all,
+                            &bytes);
+        free(image);
+        if (rc) return rank == 0 ? cli_fail("image", 0, "out of memory gathering the image") : CLI_FAILURE;
+        if (rank != 0) return 0;
+        image = all;
+    }
     if (rc) {
         free(image);
         return cli_fail("image", rc, "backprojection failed");

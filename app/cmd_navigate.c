@@ -1,6 +1,7 @@
 /* sasnav navigate: the trajectory of a whole run from ping-pair estimates
  * (paper Section IV-C). */
 #include "cli.h"
+#include "core/clock.h"
 #include "sasnav/io.h"
 #include "sasnav/navigate.h"
 
@@ -86,7 +87,16 @@ static const char *help =
     "  -o FILE           output navigation file (HDF5)\n"
     "\n"
     "Progress on stderr: a bar on a terminal, otherwise a line every 10 s\n"
-    "(pairs done, rate, time left; SASNAV_PROGRESS_SECONDS sets the period).\n";
+    "(pairs done, rate, time left; SASNAV_PROGRESS_SECONDS sets the period).\n"
+    "\n"
+    "Survey scale: the run is read ping by ping (only the pings in flight are\n"
+    "in memory). 'mpirun -np N sasnav navigate ...' spreads the pairs over N\n"
+    "processes (one node or many); rank 0 gathers them and writes the same\n"
+    "navigation as one process, bit for bit (docs/survey.md). --threads then\n"
+    "counts per process; --checkpoint is for one process.\n";
+
+/* Processes of the MPI job that estimated the pairs (1: this one alone). */
+static int nav_ranks = 1;
 
 /* Progress (cli_progress: a bar on a terminal, lines otherwise). */
 static void progress_pairs(const sasnav_navigate_progress *pr, void *user)
@@ -203,6 +213,7 @@ static void print_json(const char *input, const sasnav_navigation *nav)
     json_object_set_new(root, "seconds_per_pair", real_or_null(nav->seconds_per_pair));
     json_object_set_new(root, "pairs_per_second", real_or_null(nav->pairs_per_second));
     json_object_set_new(root, "threads_over_pairs", json_integer(nav->threads_over_pairs));
+    json_object_set_new(root, "processes", json_integer(nav_ranks));
     char *text = json_dumps(root, JSON_INDENT(2) | JSON_REAL_PRECISION(10));
     if (text) puts(text);
     free(text);
@@ -235,9 +246,15 @@ static void print_text(const sasnav_navigation *nav)
         printf("rms cumulative error:   surge %.3f mm, sway %.4f mm, yaw %.3e rad\n",
                1e3 * nav->rms_cumulative.x, 1e3 * nav->rms_cumulative.y, nav->rms_cumulative.theta);
     }
-    printf("%d pairs in %.2f s (%.2f s per pair; %.2f pairs/s with %d pair%s at a time)\n",
-           nav->n_pairs, nav->seconds, nav->seconds_per_pair, nav->pairs_per_second,
-           nav->threads_over_pairs, nav->threads_over_pairs == 1 ? "" : "s");
+    if (nav_ranks > 1)
+        printf("%d pairs in %.2f s (%.2f s per pair; %.2f pairs/s with %d processes of %d pair%s at a "
+               "time)\n",
+               nav->n_pairs, nav->seconds, nav->seconds_per_pair, nav->pairs_per_second, nav_ranks,
+               nav->threads_over_pairs, nav->threads_over_pairs == 1 ? "" : "s");
+    else
+        printf("%d pairs in %.2f s (%.2f s per pair; %.2f pairs/s with %d pair%s at a time)\n",
+               nav->n_pairs, nav->seconds, nav->seconds_per_pair, nav->pairs_per_second,
+               nav->threads_over_pairs, nav->threads_over_pairs == 1 ? "" : "s");
 }
 
 int cmd_navigate(int argc, char **argv)
@@ -350,21 +367,69 @@ int cmd_navigate(int argc, char **argv)
     no.progress = progress_pairs;
     no.progress_user = &prog;
 
+    int ranks = cli_mpi_size(), rank = cli_mpi_rank(), rank0_failed = 0;
+    if (ranks > 1 && checkpoint)
+        return cli_usage("navigate", "--checkpoint is for one process, not for the %d of mpirun", ranks);
+
+    /* Streamed: the samples stay in the file, the pairs read their pings. */
+    double t_start = sasnav_now_seconds();
     sasnav_run *run = NULL;
-    int rc = sasnav_run_read(input, &run);
-    if (rc) return cli_fail("navigate", rc, "cannot read %s", input);
+    int rc = sasnav_run_open(input, &run);
+    if (cli_mpi_any(rc != 0, &rank0_failed)) {
+        if (rc && (rank == 0 || !rank0_failed)) return cli_fail("navigate", rc, "cannot read %s", input);
+        sasnav_run_free(run);
+        return CLI_FAILURE;
+    }
     if (anchor_truth && !run->truth) {
         sasnav_run_free(run);
         return cli_fail("navigate", 0, "--anchor-truth: %s holds no ground truth", input);
     }
+    void *gathered = NULL;
+    if (ranks > 1) {
+        /* Each rank estimates its share of the pairs; rank 0 gathers the
+         * records and navigates with them (no pair estimated twice). */
+        sasnav_pair_record *mine = NULL;
+        int n_mine = 0;
+        rc = sasnav_navigate_part(run, &no, rank, ranks, &mine, &n_mine);
+        cli_progress_end(&prog);
+        if (cli_mpi_any(rc != 0, &rank0_failed)) {
+            if (rc && (rank == 0 || !rank0_failed))
+                cli_fail("navigate", rc, "navigation of %s failed", input);
+            sasnav_run_free(run);
+            return CLI_FAILURE;
+        }
+        size_t bytes = 0;
+        rc = cli_mpi_gather(mine, sizeof *mine * (size_t)n_mine, &gathered, &bytes);
+        free(mine);
+        if (rc) {
+            sasnav_run_free(run);
+            return rank == 0 ? cli_fail("navigate", 0, "out of memory gathering the pair estimates") : CLI_FAILURE;
+        }
+        if (rank != 0) {
+            sasnav_run_free(run);
+            return 0;
+        }
+        no.done = gathered;
+        no.n_done = (int)(bytes / sizeof(sasnav_pair_record));
+        no.progress = NULL;
+        nav_ranks = ranks;
+    }
     cli_checkpoint ck;
     if (cli_checkpoint_begin(&ck, "navigate", checkpoint, &no)) {
         sasnav_run_free(run);
+        free(gathered);
         return CLI_FAILURE;
     }
     sasnav_navigation nav;
     rc = sasnav_navigate(run, &no, &nav);
     cli_progress_end(&prog);
+    free(gathered);
+    if (!rc && ranks > 1) {
+        /* The job's figures: wall time from the start, all pairs. */
+        nav.seconds = sasnav_now_seconds() - t_start;
+        nav.seconds_estimation = nav.seconds;
+        nav.pairs_per_second = nav.seconds > 0 ? nav.n_pairs / nav.seconds : 0.0;
+    }
     if (rc) {
         sasnav_run_free(run);
         rc = cli_fail("navigate", rc, "navigation of %s failed", input);

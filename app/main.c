@@ -50,7 +50,20 @@ static const command commands[] = {
     {"validate", cmd_validate},
 };
 
+/* Commands that split their work over the ranks of an MPI job. */
+static int runs_distributed(const char *name) { return !strcmp(name, "navigate") || !strcmp(name, "image"); }
+
+static int run_command(int argc, char **argv);
+
 int main(int argc, char **argv)
+{
+    if (cli_mpi_init(&argc, &argv)) return CLI_FAILURE;
+    int rc = run_command(argc, argv);
+    cli_mpi_finalize();
+    return rc;
+}
+
+static int run_command(int argc, char **argv)
 {
     cli_install_signal_handlers();
     opterr = 0; /* the commands report bad options themselves (cli_bad_option) */
@@ -67,7 +80,13 @@ int main(int argc, char **argv)
         return 0;
     }
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        if (!strcmp(argv[1], commands[i].name)) return commands[i].run(argc - 1, argv + 1);
+        if (!strcmp(argv[1], commands[i].name)) {
+            if (cli_mpi_size() > 1 && !runs_distributed(argv[1]))
+                return cli_usage(argv[1], "runs as one process: of the commands, navigate and image "
+                                          "split their work over the %d processes of mpirun",
+                                 cli_mpi_size());
+            return commands[i].run(argc - 1, argv + 1);
+        }
     const char *names[sizeof commands / sizeof commands[0]];
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++) names[i] = commands[i].name;
     const char *near = cli_nearest(argv[1], names, (int)(sizeof names / sizeof names[0]));

@@ -42,6 +42,7 @@ static void duration(char *buf, size_t n, double s)
 
 void cli_progress_update(cli_progress *p, int done, int total)
 {
+    if (cli_mpi_rank() != 0) return; /* rank 0 speaks for an MPI job (its own share) */
     double t = now(), el = t - p->t0;
     double rate = el > 0 ? done / el : 0;
     char left[32] = "";

@@ -12,4 +12,5 @@ $SUDO apt-get install -y --no-install-recommends \
     libnlopt-dev libplplot-dev plplot-driver-cairo \
     libpng-dev libfyaml-dev libjansson-dev libsndfile1-dev \
     python3 python3-numpy python3-h5py python3-pytest python3-venv python3-setuptools python3-pip \
+    openmpi-bin libopenmpi-dev \
     clang libclang-rt-14-dev libomp-dev llvm octave

@@ -37,7 +37,9 @@ int sasnav_grid_check(const sasnav_grid *grid);
 void sasnav_grid_points(const sasnav_grid *grid, sasnav_pose frame, double *x, double *y);
 
 /* Backprojection of a whole run (paper eq. bckprj): image = sum_p T_p^H phi_p
- * on `grid`, with ping poses nav[p] (world frame). image has nx * ny values. */
+ * on `grid`, with ping poses nav[p] (world frame). image has nx * ny values.
+ * Any grid size: computed in tiles of rows (sasnav_backproject_rows); the
+ * run may be streamed. */
 int sasnav_backproject(const sasnav_run *run, const sasnav_ping_pose *nav,
                        const sasnav_grid *grid, const sasnav_op_opts *opts,
                        sasnav_cfloat *image);
@@ -50,6 +52,22 @@ typedef void (*sasnav_ping_progress_fn)(int done, int total, void *user);
 int sasnav_backproject_progress(const sasnav_run *run, const sasnav_ping_pose *nav,
                                 const sasnav_grid *grid, const sasnav_op_opts *opts,
                                 sasnav_cfloat *image, sasnav_ping_progress_fn progress, void *user);
+
+/* Backprojection in tiles of at most this many (pixel, channel) pairs
+ * (about 44 bytes of operator memory each: some 180 MB per tile), whole
+ * rows of the grid each; every tile goes over all pings. */
+#define SASNAV_BACKPROJECT_TILE_PAIRS (1L << 22)
+
+/* Rows row0 .. row1 - 1 of the backprojection on `grid` (image holds nx *
+ * (row1 - row0) values, row row0 first): the same bits as those rows of
+ * sasnav_backproject on the whole grid, whatever the split (tiles,
+ * processes of a distributed image). The run may be streamed
+ * (sasnav_run_open): its pings are then read once per tile. progress
+ * counts (tile, ping) steps. */
+int sasnav_backproject_rows(const sasnav_run *run, const sasnav_ping_pose *nav,
+                            const sasnav_grid *grid, int row0, int row1,
+                            const sasnav_op_opts *opts, sasnav_cfloat *image,
+                            sasnav_ping_progress_fn progress, void *user);
 
 /* Options of the CGLS pseudo-inverse. */
 typedef struct {

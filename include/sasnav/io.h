@@ -32,6 +32,14 @@ extern "C" {
 int sasnav_run_write(const char *path, const sasnav_run *run);
 int sasnav_run_read(const char *path, sasnav_run **run);
 
+/* Opens a run file for streaming: everything but the samples is read and
+ * checked as by sasnav_run_read; the pings are read one at a time when
+ * used (sasnav_run_get_ping: one HDF5 chunk each), and each is checked
+ * then (a non-finite sample is an error naming the ping). Memory: the
+ * run's navigation, truth and aiding (tens of bytes per ping), not its
+ * samples. The file stays open until sasnav_run_free. */
+int sasnav_run_open(const char *path, sasnav_run **run);
+
 /* Navigation only (e.g. the output of `sasnav navigate`): /nav/tx,
  * /nav/array [ping][3] and optionally /truth/tx, /truth/array. */
 int sasnav_nav_write(const char *path, int n_pings, const sasnav_ping_pose *nav,

@@ -289,6 +289,24 @@ struct sasnav_navigation {
 int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
                     sasnav_navigation *out);
 
+/* One part of a navigation spread over processes or nodes (e.g. the ranks
+ * of `mpirun -np N sasnav navigate`). Estimates the first estimates of the
+ * pairs of part `part` (0 <= part < n_parts): pair j of the output order
+ * (consecutive pairs, then the long baselines) when j % n_parts == part,
+ * interleaved so that every part gets early and late pairs alike. Returns
+ * them as records in *records (malloc'd, free() it; *n_records entries;
+ * pairs taken from opts->done count too). The navigation is then
+ * sasnav_navigate with opts->done = the records of all parts: no pair is
+ * estimated again and the result is the same bits as one sasnav_navigate
+ * of the whole run (the keys and results do not depend on the process or
+ * the thread count). What sasnav_navigate does after the first estimates
+ * (the speed-lags second pass, re-estimates of the joint resolution) runs
+ * in that last call. Same options and errors as sasnav_navigate;
+ * SASNAV_ERR_ARG also for a bad part. The progress callback counts the
+ * part's pairs. */
+int sasnav_navigate_part(const sasnav_run *run, const sasnav_navigate_opts *opts, int part,
+                         int n_parts, sasnav_pair_record **records, int *n_records);
+
 /* Frees the arrays of `nav` and zeroes it. Safe on NULL and on a zeroed
  * struct. */
 void sasnav_navigation_free(sasnav_navigation *nav);

@@ -10,6 +10,8 @@
 #include "sasnav/geometry.h"
 #include "sasnav/model.h"
 
+#include <stddef.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -33,8 +35,23 @@ typedef struct {
     double *velocity_sigma;  /* 2 n_pings: m/s, their standard deviations */
 } sasnav_aiding;
 
-/* In-memory run. raw[(p * n_rx + l) * n_samples + m] is sample m of channel l
- * of ping p (file layout /raw [ping][channel][sample]). */
+/* Where the samples of a streamed run come from (sasnav_run_open, io.h:
+ * a run file read ping by ping). read() fills `out` (n_rx * n_samples
+ * values) with ping p and returns SASNAV_OK or an error code (message
+ * set); close() releases ctx (called by sasnav_run_free). The library
+ * never calls read() from two threads at once (sasnav_run_get_ping
+ * serialises the calls), so ctx needs no locking of its own. */
+typedef struct {
+    int (*read)(void *ctx, int p, sasnav_cfloat *out);
+    void (*close)(void *ctx);
+    void *ctx;
+} sasnav_ping_source;
+
+/* A run. raw[(p * n_rx + l) * n_samples + m] is sample m of channel l of
+ * ping p (file layout /raw [ping][channel][sample]), or raw is NULL and the
+ * pings come from `source` (a streamed run: only the pings in use are in
+ * memory; docs/library.md, "Streamed runs"). Code that reads samples goes
+ * through sasnav_run_get_ping, which serves both. */
 typedef struct {
     sasnav_system sys;
     sasnav_array array;
@@ -48,12 +65,21 @@ typedef struct {
     double tx_lag;             /* EPCA Tx-array offset used for processing, m */
     double range_of_interest;  /* centre range of the swath, m */
     sasnav_aiding *aiding;     /* aiding measurements, or NULL */
+    sasnav_ping_source source; /* streamed runs (raw NULL); zero otherwise */
 } sasnav_run;
 
 /* Allocates a run with zeroed raw data and zeroed navigation; truth is
  * allocated when with_truth != 0. */
 int sasnav_run_alloc(const sasnav_system *sys, const sasnav_array *array,
                      const sasnav_window *win, int n_pings, int with_truth, sasnav_run **run);
+
+/* Allocates a streamed run: no samples in memory (raw NULL), its pings
+ * read through `source` (which the run owns from here: sasnav_run_free
+ * closes it, also when this call fails), zeroed navigation, truth
+ * allocated when with_truth != 0. */
+int sasnav_run_alloc_streamed(const sasnav_system *sys, const sasnav_array *array,
+                              const sasnav_window *win, int n_pings, int with_truth,
+                              const sasnav_ping_source *source, sasnav_run **run);
 
 /* Gives `run` an aiding record (replacing any): time always, the gyro
  * arrays when with_yaw_rate, the DVL arrays when with_velocity; values
@@ -67,14 +93,27 @@ int sasnav_aiding_check(const sasnav_aiding *aiding, int n_pings);
 /* Frees an aiding record (safe on NULL). */
 void sasnav_aiding_free(sasnav_aiding *aiding);
 
-/* Pointer to channel data of ping p (n_rx * n_samples samples). */
+/* Pointer to channel data of ping p (n_rx * n_samples samples) of an
+ * in-memory run; NULL for a streamed run (use sasnav_run_get_ping). */
 sasnav_cfloat *sasnav_run_ping(const sasnav_run *run, int p);
 
+/* Ping p's samples, from either kind of run: *ping points into raw (an
+ * in-memory run) or at `buf` (n_rx * n_samples values), into which a
+ * streamed run's source has read it. Calls to a source are serialised
+ * (an OpenMP critical section), so any number of threads may call this on
+ * one run. Errors: p out of range, NULL arguments, the source's error. */
+int sasnav_run_get_ping(const sasnav_run *run, int p, sasnav_cfloat *buf,
+                        const sasnav_cfloat **ping);
+
+/* Samples per ping (n_rx * n_samples). */
+size_t sasnav_run_ping_size(const sasnav_run *run);
+
 /* Validates shapes and values (finite navigation, finite samples, the
- * aiding record when present). */
+ * aiding record when present). A streamed run's samples are checked as
+ * each ping is read (by its source), not here. */
 int sasnav_run_check(const sasnav_run *run);
 
-/* A new run holding pings[0..n_pings-1] of `run` (in that order) and, when
+/* A new in-memory run holding pings[0..n_pings-1] of `run` (in that order; read from its source when `run` is streamed) and, when
  * `channels` is not NULL, only channels[0..n_channels-1] (the array keeps
  * those receivers' positions); navigation, truth and the run's constants
  * are carried over (ping_spacing scaled to the mean index step), and the
@@ -83,7 +122,7 @@ int sasnav_run_check(const sasnav_run *run);
 int sasnav_run_subset(const sasnav_run *run, const int *pings, int n_pings, const int *channels,
                       int n_channels, sasnav_run **out);
 
-/* Safe on NULL. */
+/* Frees the run (and closes a streamed run's source). Safe on NULL. */
 void sasnav_run_free(sasnav_run *run);
 
 #ifdef __cplusplus

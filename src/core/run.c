@@ -63,10 +63,74 @@ int sasnav_run_alloc(const sasnav_system *sys, const sasnav_array *array,
     return SASNAV_OK;
 }
 
+int sasnav_run_alloc_streamed(const sasnav_system *sys, const sasnav_array *array,
+                              const sasnav_window *win, int n_pings, int with_truth,
+                              const sasnav_ping_source *source, sasnav_run **run)
+{
+    int rc = SASNAV_OK;
+    if (!run) rc = sasnav_set_error(SASNAV_ERR_ARG, "run output pointer is NULL");
+    else *run = NULL;
+    if (!rc && (!source || !source->read))
+        rc = sasnav_set_error(SASNAV_ERR_ARG, "a streamed run needs a ping source");
+    if (!rc && !sys) rc = sasnav_set_error(SASNAV_ERR_ARG, "system is NULL");
+    if (!rc) rc = sasnav_system_check(sys);
+    if (!rc) rc = sasnav_array_check(array);
+    if (!rc) rc = window_check(win);
+    if (!rc && n_pings < 1) rc = sasnav_set_error(SASNAV_ERR_ARG, "run needs >= 1 ping, got %d", n_pings);
+    if (!rc && run_sample_count(1, array->n_rx, win->n_samples) == 0)
+        rc = sasnav_set_error(SASNAV_ERR_ARG, "pings of %d channels x %d samples are too large",
+                              array->n_rx, win->n_samples);
+    sasnav_run *r = rc ? NULL : calloc(1, sizeof *r);
+    if (!rc && !r) rc = sasnav_set_error(SASNAV_ERR_NOMEM, "cannot allocate a run");
+    if (rc) {
+        if (source && source->close) source->close(source->ctx);
+        return rc;
+    }
+    r->sys = *sys;
+    r->array = *array;
+    r->win = *win;
+    r->n_pings = n_pings;
+    r->source = *source;
+    r->nav = calloc((size_t)n_pings, sizeof *r->nav);
+    if (with_truth) r->truth = calloc((size_t)n_pings, sizeof *r->truth);
+    if (!r->nav || (with_truth && !r->truth)) {
+        sasnav_run_free(r);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "cannot allocate the navigation of %d pings", n_pings);
+    }
+    *run = r;
+    return SASNAV_OK;
+}
+
 sasnav_cfloat *sasnav_run_ping(const sasnav_run *run, int p)
 {
     if (!run || !run->raw || p < 0 || p >= run->n_pings) return NULL;
     return run->raw + (size_t)p * (size_t)run->array.n_rx * (size_t)run->win.n_samples;
+}
+
+size_t sasnav_run_ping_size(const sasnav_run *run)
+{
+    return run ? (size_t)run->array.n_rx * (size_t)run->win.n_samples : 0;
+}
+
+int sasnav_run_get_ping(const sasnav_run *run, int p, sasnav_cfloat *buf,
+                        const sasnav_cfloat **ping)
+{
+    if (!run || !ping) return sasnav_set_error(SASNAV_ERR_ARG, "NULL run or ping pointer");
+    *ping = NULL;
+    if (p < 0 || p >= run->n_pings)
+        return sasnav_set_error(SASNAV_ERR_ARG, "ping %d outside 0..%d", p, run->n_pings - 1);
+    if (run->raw) {
+        *ping = sasnav_run_ping(run, p);
+        return SASNAV_OK;
+    }
+    if (!run->source.read || !buf)
+        return sasnav_set_error(SASNAV_ERR_ARG, "run has no samples (no raw data, no source or no buffer)");
+    int rc;
+#pragma omp critical(sasnav_ping_source)
+    rc = run->source.read(run->source.ctx, p, buf);
+    if (rc) return rc;
+    *ping = buf;
+    return SASNAV_OK;
 }
 
 void sasnav_aiding_free(sasnav_aiding *a)
@@ -185,7 +249,8 @@ int sasnav_run_check(const sasnav_run *run)
         return sasnav_set_error(SASNAV_ERR_ARG, "run needs >= 1 ping, got %d", run->n_pings);
     size_t n = run_sample_count(run->n_pings, run->array.n_rx, run->win.n_samples);
     if (n == 0) return sasnav_set_error(SASNAV_ERR_ARG, "run dimensions overflow");
-    if (!run->raw || !run->nav) return sasnav_set_error(SASNAV_ERR_ARG, "run data or navigation is NULL");
+    if ((!run->raw && !run->source.read) || !run->nav)
+        return sasnav_set_error(SASNAV_ERR_ARG, "run data or navigation is NULL");
     if (!isfinite(run->ping_spacing) || !isfinite(run->tx_lag))
         return sasnav_set_error(SASNAV_ERR_ARG, "ping spacing and Tx lag must be finite");
     if (fabs(run->ping_spacing) > SASNAV_SIZE_MAX_M || fabs(run->tx_lag) > SASNAV_SIZE_MAX_M)
@@ -216,7 +281,7 @@ int sasnav_run_check(const sasnav_run *run)
     rc = sasnav_aiding_check(run->aiding, run->n_pings);
     if (rc) return rc;
     const float *v = (const float *)run->raw; /* C11 6.2.5: complex = float[2] */
-    for (size_t k = 0; k < 2 * n; k++)
+    for (size_t k = 0; v && k < 2 * n; k++)
         if (!isfinite(v[k])) {
             size_t s = k / 2, per_ping = n / (size_t)run->n_pings;
             return sasnav_set_error(SASNAV_ERR_ARG,
@@ -231,6 +296,7 @@ void sasnav_run_free(sasnav_run *run)
 {
     if (!run) return;
     free(run->raw);
+    if (run->source.close) run->source.close(run->source.ctx);
     free(run->nav);
     free(run->truth);
     sasnav_aiding_free(run->aiding);
@@ -262,15 +328,29 @@ int sasnav_run_subset(const sasnav_run *run, const int *pings, int n_pings, cons
     int rc = sasnav_run_alloc(&run->sys, &a, &run->win, n_pings, run->truth != NULL, &r);
     if (rc) return rc;
     size_t ns = (size_t)run->win.n_samples;
+    sasnav_cfloat *tmp = NULL; /* a streamed ping whose channels are picked */
     for (int i = 0; i < n_pings; i++) {
-        const sasnav_cfloat *src = sasnav_run_ping(run, pings[i]);
         sasnav_cfloat *dst = sasnav_run_ping(r, i);
-        for (int l = 0; l < nc; l++)
+        const sasnav_cfloat *src = NULL;
+        if (run->raw) src = sasnav_run_ping(run, pings[i]);
+        else if (!channels) rc = sasnav_run_get_ping(run, pings[i], dst, &src); /* read in place */
+        else {
+            if (!tmp) tmp = malloc(sizeof *tmp * sasnav_run_ping_size(run));
+            rc = tmp ? sasnav_run_get_ping(run, pings[i], tmp, &src)
+                     : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        }
+        if (rc) {
+            free(tmp);
+            sasnav_run_free(r);
+            return rc;
+        }
+        for (int l = 0; src != dst && l < nc; l++)
             memcpy(dst + (size_t)l * ns, src + (size_t)(channels ? channels[l] : l) * ns,
                    sizeof(sasnav_cfloat) * ns);
         r->nav[i] = run->nav[pings[i]];
         if (run->truth) r->truth[i] = run->truth[pings[i]];
     }
+    free(tmp);
     r->ping_spacing = n_pings > 1 ? run->ping_spacing * fabs((double)(pings[n_pings - 1] - pings[0])) /
                                         (n_pings - 1)
                                   : run->ping_spacing;

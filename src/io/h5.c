@@ -282,8 +282,43 @@ static int raw_read(h5_ctx *c, hid_t dset, sasnav_run *run)
     return SASNAV_OK;
 }
 
-/* Everything after the file is open; *out is set only on success. */
-static int run_read_open(h5_ctx *c, sasnav_run **out)
+/* A streamed run's source: the open file and its /raw dataset. */
+typedef struct {
+    char *path;
+    hid_t file, raw;
+    size_t per_ping, per_channel;
+} run_stream;
+
+static void stream_close(void *ctx)
+{
+    run_stream *st = ctx;
+    if (!st) return;
+    if (st->raw >= 0) H5Dclose(st->raw);
+    if (st->file >= 0) H5Fclose(st->file);
+    free(st->path);
+    free(st);
+}
+
+static int stream_read(void *ctx, int p, sasnav_cfloat *out)
+{
+    run_stream *st = ctx;
+    h5_ctx c;
+    h5_begin(&c, st->path); /* messages name the file; c.file stays unset */
+    int rc = h5_read_rows(&c, st->raw, "/raw", H5_COMPLEX, (hsize_t)p, 1, out);
+    size_t bad;
+    if (!rc && !floats_finite((const float *)out, 2 * st->per_ping, &bad)) {
+        bad /= 2;
+        rc = h5_fail(&c, SASNAV_ERR_FORMAT, "/raw: sample %zu of channel %zu of ping %d is not finite",
+                     bad % st->per_channel, bad / st->per_channel, p);
+    }
+    h5_end(&c);
+    return rc;
+}
+
+/* Everything after the file is open; *out is set only on success. With
+ * `streamed`, the samples are left in the file and the run reads them
+ * through a run_stream that takes over c->file. */
+static int run_read_open(h5_ctx *c, int streamed, sasnav_run **out)
 {
     sasnav_run h;
     memset(&h, 0, sizeof h);
@@ -302,12 +337,31 @@ static int run_read_open(h5_ctx *c, sasnav_run **out)
         rc = h5_fail(c, SASNAV_ERR_FORMAT, "/nav/tx has %d pings, /raw has %d", nav_pings, h.n_pings);
 
     sasnav_run *run = NULL;
-    if (!rc) {
+    if (!rc && streamed) {
+        run_stream *st = calloc(1, sizeof *st);
+        char *path = st ? strdup(c->path) : NULL;
+        if (!st || !path) {
+            free(st);
+            rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        } else {
+            st->path = path;
+            st->raw = raw;
+            st->file = c->file;
+            st->per_channel = (size_t)h.win.n_samples;
+            st->per_ping = st->per_channel * (size_t)h.array.n_rx;
+            raw = H5I_INVALID_HID;
+            c->file = H5I_INVALID_HID; /* the source owns the file now */
+            sasnav_ping_source src = {stream_read, stream_close, st};
+            rc = sasnav_run_alloc_streamed(&h.sys, &h.array, &h.win, h.n_pings, with_truth, &src, &run);
+            if (rc) rc = h5_reframe(c, rc, "/raw");
+            else c->file = st->file; /* borrowed for the reads below */
+        }
+    } else if (!rc) {
         rc = sasnav_run_alloc(&h.sys, &h.array, &h.win, h.n_pings, with_truth, &run);
         if (rc) rc = h5_reframe(c, rc, "/raw");
+        if (!rc) rc = raw_read(c, raw, run);
     }
-    if (!rc) rc = raw_read(c, raw, run);
-    H5Dclose(raw);
+    if (raw >= 0) H5Dclose(raw);
     if (!rc) rc = poses_read(c, "/nav", run->n_pings, run->nav);
     if (!rc && with_truth) rc = poses_read(c, "/truth", run->n_pings, run->truth);
     if (!rc) rc = aiding_read(c, run);
@@ -319,6 +373,7 @@ static int run_read_open(h5_ctx *c, sasnav_run **out)
         rc = sasnav_run_check(run);
         if (rc) rc = h5_reframe(c, rc, "run");
     }
+    if (streamed && run) c->file = H5I_INVALID_HID; /* the run's source closes it */
     if (rc) {
         sasnav_run_free(run);
         return rc;
@@ -327,7 +382,7 @@ static int run_read_open(h5_ctx *c, sasnav_run **out)
     return SASNAV_OK;
 }
 
-int sasnav_run_read(const char *path, sasnav_run **run)
+static int run_load(const char *path, int streamed, sasnav_run **run)
 {
     if (!run) return sasnav_set_error(SASNAV_ERR_ARG, "run output pointer is NULL");
     *run = NULL;
@@ -335,10 +390,14 @@ int sasnav_run_read(const char *path, sasnav_run **run)
     h5_ctx c;
     h5_begin(&c, path);
     int rc = h5_open_read(&c, RUN_FORMATS, 1);
-    if (!rc) rc = run_read_open(&c, run);
+    if (!rc) rc = run_read_open(&c, streamed, run);
     h5_end(&c);
     return rc;
 }
+
+int sasnav_run_read(const char *path, sasnav_run **run) { return run_load(path, 0, run); }
+
+int sasnav_run_open(const char *path, sasnav_run **run) { return run_load(path, 1, run); }
 
 /* --- navigation files ------------------------------------------------------ */
 

@@ -514,6 +514,37 @@ int h5_read_dataset(h5_ctx *c, hid_t dset, const char *name, int kind, void *buf
     return rc;
 }
 
+int h5_read_rows(h5_ctx *c, hid_t dset, const char *name, int kind, hsize_t first, hsize_t count,
+                 void *buf)
+{
+    int rc = SASNAV_OK;
+    hsize_t dims[8], start[8] = {0}, n[8];
+    hid_t mem = kind_type(kind, 0), fspace = H5Dget_space(dset), mspace = H5I_INVALID_HID;
+    int rank = fspace >= 0 ? H5Sget_simple_extent_ndims(fspace) : -1;
+    if (mem < 0 || fspace < 0 || rank < 1 || rank > 8 ||
+        H5Sget_simple_extent_dims(fspace, dims, NULL) < 0)
+        rc = h5_fail_lib(c, SASNAV_ERR_FORMAT, "cannot read the shape of %s", name);
+    if (!rc && first + count > dims[0])
+        rc = h5_fail(c, SASNAV_ERR_FORMAT, "%s has %llu rows, rows %llu..%llu asked for", name,
+                     (unsigned long long)dims[0], (unsigned long long)first,
+                     (unsigned long long)(first + count - 1));
+    if (!rc) {
+        for (int k = 0; k < rank; k++) n[k] = dims[k];
+        start[0] = first;
+        n[0] = count;
+        mspace = H5Screate_simple(rank, n, NULL);
+        if (mspace < 0 || H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, NULL, n, NULL) < 0)
+            rc = h5_fail_lib(c, SASNAV_ERR_INTERNAL, "cannot select rows of %s", name);
+    }
+    if (!rc && H5Dread(dset, mem, mspace, fspace, H5P_DEFAULT, buf) < 0)
+        rc = h5_fail_lib(c, SASNAV_ERR_FORMAT, "cannot read rows %llu..%llu of %s (corrupt data)",
+                         (unsigned long long)first, (unsigned long long)(first + count - 1), name);
+    if (mspace >= 0) H5Sclose(mspace);
+    if (fspace >= 0) H5Sclose(fspace);
+    if (mem >= 0) H5Tclose(mem);
+    return rc;
+}
+
 int h5_read_dataset_dims(h5_ctx *c, const char *name, int kind, int rank, const hsize_t *dims,
                          void *buf)
 {

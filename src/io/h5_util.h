@@ -80,6 +80,10 @@ int h5_open_dataset(h5_ctx *c, const char *name, int kind, int rank, hsize_t *di
  * sasnav_cfloat). */
 int h5_read_dataset(h5_ctx *c, hid_t dset, const char *name, int kind, void *buf);
 /* Convenience: open, check dims equal `dims`, read, close. */
+/* Reads rows first .. first + count - 1 (along the first dimension) of an
+ * open dataset into buf. */
+int h5_read_rows(h5_ctx *c, hid_t dset, const char *name, int kind, hsize_t first, hsize_t count,
+                 void *buf);
 int h5_read_dataset_dims(h5_ctx *c, const char *name, int kind, int rank, const hsize_t *dims,
                          void *buf);
 

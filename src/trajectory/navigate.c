@@ -97,7 +97,34 @@ typedef struct {
     const sasnav_pair_record **done; /* opts->done sorted by key (NULL: none) */
     int n_done;
     uint64_t digest;          /* options_digest: the seed of every pair key */
+    int part, n_parts;        /* sasnav_navigate_part: estimate pairs j with
+                                 j % n_parts == part only (n_parts 1: all) */
+    uint64_t *keys;           /* per output pair: its key (part mode), or NULL */
+    sasnav_cfloat *bufs;      /* streamed runs: two pings per worker, or NULL */
 } nav_ctx;
+
+/* Pings p and q of the run: pointers into it (in-memory run) or read into
+ * worker t's buffers (streamed run: only the pings in flight are held). */
+static int load_pair(const nav_ctx *ctx, int t, int p, int q, const sasnav_cfloat **dp,
+                     const sasnav_cfloat **dq)
+{
+    size_t n = sasnav_run_ping_size(ctx->run);
+    sasnav_cfloat *b = ctx->bufs ? ctx->bufs + 2 * (size_t)t * n : NULL;
+    int rc = sasnav_run_get_ping(ctx->run, p, b, dp);
+    if (!rc) rc = sasnav_run_get_ping(ctx->run, q, b ? b + n : NULL, dq);
+    return rc;
+}
+
+/* The estimator's data: pair (p, q) through worker t's buffers, with the
+ * per-ping offsets when in use. */
+static int set_pair_data(const nav_ctx *ctx, int t, sasnav_pair *est, int p, int q, sasnav_pose nominal)
+{
+    const sasnav_cfloat *dp, *dq;
+    int rc = load_pair(ctx, t, p, q, &dp, &dq);
+    if (rc) return rc;
+    return ctx->lags ? sasnav_pair_set_data_lags(est, dp, dq, nominal, ctx->lags[p], ctx->lags[q])
+                     : sasnav_pair_set_data(est, dp, dq, nominal);
+}
 
 static uint64_t hash_ints(uint64_t h, const int *v, int n)
 {
@@ -145,7 +172,8 @@ static uint64_t options_digest(const sasnav_run *run, const sasnav_navigate_opts
 }
 
 /* Content key of pair (p, q): navigate.h, sasnav_pair_record. */
-static uint64_t pair_key(const nav_ctx *ctx, int p, int q)
+static uint64_t pair_key(const nav_ctx *ctx, int p, int q, const sasnav_cfloat *dp,
+                         const sasnav_cfloat *dq)
 {
     const sasnav_run *run = ctx->run;
     size_t n = (size_t)run->array.n_rx * (size_t)run->win.n_samples;
@@ -163,9 +191,10 @@ static uint64_t pair_key(const nav_ctx *ctx, int p, int q)
                            run->sys.sample_rate, run->win.t0, run->range_of_interest};
     for (int j = 0; j < 6; j++) h = sasnav_hash_double(h, sys[j]);
     const int pings[2] = {p, q};
+    const sasnav_cfloat *data[2] = {dp, dq};
     for (int k = 0; k < 2; k++) {
         int i = pings[k];
-        h = sasnav_hash_words(h, sasnav_run_ping(run, i), n * sizeof(sasnav_cfloat));
+        h = sasnav_hash_words(h, data[k], n * sizeof(sasnav_cfloat));
         h = sasnav_hash_ping_poses(h, &run->nav[i], 1);
         h = sasnav_hash_double(h, ctx->lags ? ctx->lags[i] : run->tx_lag);
     }
@@ -196,9 +225,10 @@ static const sasnav_pair_record *find_record(const nav_ctx *ctx, uint64_t key)
 /* Estimates pair (p, q) into *np (or takes it from ctx->done: *resumed
  * = 1). Returns a fatal code, else SASNAV_OK with np->status telling how
  * the pair went. *key: the pair's content key. */
-static int estimate_pair(nav_ctx *ctx, sasnav_pair *estimator, int p, int q,
-                         sasnav_navigate_pair *np, uint64_t *key, int *resumed)
+static int estimate_pair(nav_ctx *ctx, int t, int p, int q, sasnav_navigate_pair *np,
+                         uint64_t *key, int *resumed)
 {
+    sasnav_pair *estimator = ctx->estimators ? ctx->estimators[t] : NULL;
     const sasnav_run *run = ctx->run;
     memset(np, 0, sizeof *np);
     np->p = p;
@@ -208,7 +238,10 @@ static int estimate_pair(nav_ctx *ctx, sasnav_pair *estimator, int p, int q,
         sasnav_pose d = sasnav_ping_displacement(&run->truth[p], &run->truth[q]);
         np->truth = pose_sub(d, np->nominal);
     }
-    *key = pair_key(ctx, p, q);
+    const sasnav_cfloat *dp, *dq;
+    int rc = load_pair(ctx, t, p, q, &dp, &dq); /* a ping that cannot be read stops the run */
+    if (rc) return rc;
+    *key = pair_key(ctx, p, q, dp, dq);
     *resumed = 0;
     const sasnav_pair_record *rec = ctx->n_done > 0 ? find_record(ctx, *key) : NULL;
     if (rec) {
@@ -220,7 +253,6 @@ static int estimate_pair(nav_ctx *ctx, sasnav_pair *estimator, int p, int q,
         *resumed = 1;
         return SASNAV_OK;
     }
-    int rc;
     const sasnav_navigation *reuse = ctx->opts->reuse;
     if (reuse) {
         /* The earlier estimate of the same pair. */
@@ -244,16 +276,29 @@ static int estimate_pair(nav_ctx *ctx, sasnav_pair *estimator, int p, int q,
     } else if (ctx->opts->method == SASNAV_METHOD_DPCA) {
         sasnav_dpca_opts o = ctx->opts->dpca;
         o.nthreads = ctx->opts->nthreads;
-        rc = sasnav_dpca_estimate(run, p, q, &o, &np->result, NULL);
+        if (run->raw) {
+            rc = sasnav_dpca_estimate(run, p, q, &o, &np->result, NULL);
+        } else {
+            /* A streamed run: the two pings (in worker t's buffers, one
+             * after the other) as a two-ping run; DPCA reads only them and
+             * the run's constants (its nominal step: 1 x (q - p) spacings). */
+            sasnav_run two = *run;
+            sasnav_ping_pose nav2[2] = {run->nav[p], run->nav[q]};
+            two.raw = (sasnav_cfloat *)dp;
+            two.n_pings = 2;
+            two.nav = nav2;
+            two.truth = NULL;
+            two.aiding = NULL;
+            memset(&two.source, 0, sizeof two.source);
+            two.ping_spacing = run->ping_spacing * (double)(q - p);
+            rc = sasnav_dpca_estimate(&two, 0, 1, &o, &np->result, NULL);
+        }
     } else {
-        double t = sasnav_now_seconds();
-        rc = ctx->lags ? sasnav_pair_set_data_lags(estimator, sasnav_run_ping(run, p),
-                                                   sasnav_run_ping(run, q), np->nominal,
-                                                   ctx->lags[p], ctx->lags[q])
-                       : sasnav_pair_set_data(estimator, sasnav_run_ping(run, p),
-                                              sasnav_run_ping(run, q), np->nominal);
+        double t0 = sasnav_now_seconds();
+        rc = ctx->lags ? sasnav_pair_set_data_lags(estimator, dp, dq, np->nominal, ctx->lags[p], ctx->lags[q])
+                       : sasnav_pair_set_data(estimator, dp, dq, np->nominal);
         if (!rc) rc = sasnav_pair_estimate(estimator, &np->result);
-        if (rc) np->result.seconds = sasnav_now_seconds() - t;
+        if (rc) np->result.seconds = sasnav_now_seconds() - t0;
     }
     if (fatal_code(rc)) return rc;
     if (!rc && np->result.status == SASNAV_ERR_NO_OVERLAP) rc = SASNAV_ERR_NO_OVERLAP;
@@ -373,7 +418,19 @@ static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
             pq[2 * k + 1] = p + 2;
             k++;
         }
-    report(ctx, 0, total, NULL, 0, 0);
+    /* The pairs this call estimates: all, or those of its part. */
+    int *mine = malloc(sizeof(int) * (size_t)total);
+    if (!mine) {
+        free(pq);
+        free(codes);
+        free(messages);
+        free(use_long);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    }
+    int n_mine = 0;
+    for (int j = 0; j < total; j++)
+        if (j % ctx->n_parts == ctx->part) mine[n_mine++] = j;
+    report(ctx, 0, n_mine, NULL, 0, 0);
     double t_est = sasnav_now_seconds();
     /* Independent pairs run concurrently, one estimator per thread; each
      * pair's result depends on its own data only (the operators sum in a
@@ -382,7 +439,8 @@ static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
      * remaining pairs. */
     int done = 0, stop = 0;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(ctx->n_workers) if (ctx->n_workers > 1)
-    for (int j = 0; j < total; j++) {
+    for (int m = 0; m < n_mine; m++) {
+        int j = mine[m];
         int skip;
 #pragma omp atomic read
         skip = stop;
@@ -390,8 +448,8 @@ static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
         int t = ctx->n_workers > 1 ? omp_get_thread_num() : 0;
         uint64_t key;
         int resumed;
-        int rc = estimate_pair(ctx, ctx->estimators ? ctx->estimators[t] : NULL, pq[2 * j],
-                               pq[2 * j + 1], &out->pairs[j], &key, &resumed);
+        int rc = estimate_pair(ctx, t, pq[2 * j], pq[2 * j + 1], &out->pairs[j], &key, &resumed);
+        if (ctx->keys) ctx->keys[j] = key;
         codes[j] = rc;
         if (rc) {
             snprintf(messages[j], sizeof messages[j], "%s", sasnav_last_error());
@@ -401,12 +459,13 @@ static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
 #pragma omp critical(sasnav_navigate_progress)
             {
                 done++;
-                report(ctx, done, total, &out->pairs[j], key, resumed);
+                report(ctx, done, n_mine, &out->pairs[j], key, resumed);
             }
         }
     }
     out->seconds_estimation = sasnav_now_seconds() - t_est;
-    out->pairs_per_second = out->seconds_estimation > 0 ? total / out->seconds_estimation : 0.0;
+    out->pairs_per_second = out->seconds_estimation > 0 ? n_mine / out->seconds_estimation : 0.0;
+    free(mine);
     int rc = SASNAV_OK;
     for (int j = 0; j < total && !rc; j++)
         if (codes[j]) rc = sasnav_set_error(codes[j], "%s", messages[j]);
@@ -482,14 +541,9 @@ static int reestimate(nav_ctx *ctx, sasnav_navigate_pair *np, sasnav_pose start,
 {
     *taken = 0;
     if (!ctx->estimators) return SASNAV_OK;
-    const sasnav_run *run = ctx->run;
     sasnav_pair *est = ctx->estimators[0];
     sasnav_pair_result r;
-    int rc = ctx->lags ? sasnav_pair_set_data_lags(est, sasnav_run_ping(run, np->p),
-                                                   sasnav_run_ping(run, np->q), np->nominal,
-                                                   ctx->lags[np->p], ctx->lags[np->q])
-                       : sasnav_pair_set_data(est, sasnav_run_ping(run, np->p),
-                                              sasnav_run_ping(run, np->q), np->nominal);
+    int rc = set_pair_data(ctx, 0, est, np->p, np->q, np->nominal);
     if (!rc) rc = sasnav_pair_estimate_from(est, start, &r);
     if (fatal_code(rc)) return rc;
     if (rc || r.status == SASNAV_ERR_NO_OVERLAP) return SASNAV_OK;
@@ -770,10 +824,8 @@ static int second_pass(nav_ctx *ctx, sasnav_navigation *out)
         if (skip || np->first_verdict != SASNAV_VERDICT_OK || !usable(np)) continue;
         int t = ctx->n_workers > 1 ? omp_get_thread_num() : 0;
         sasnav_pair *est = ctx->estimators[t];
-        const sasnav_run *run = ctx->run;
         sasnav_pair_result r;
-        int rc = sasnav_pair_set_data_lags(est, sasnav_run_ping(run, np->p), sasnav_run_ping(run, np->q),
-                                           np->nominal, ctx->lags[np->p], ctx->lags[np->q]);
+        int rc = set_pair_data(ctx, t, est, np->p, np->q, np->nominal);
         if (!rc) rc = sasnav_pair_estimate_from(est, np->result.error, &r);
         if (fatal_code(rc)) {
             codes[j] = rc;
@@ -892,7 +944,7 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
         speed_lags(ctx, out, 1, ctx->lags);
     }
     int rc = estimate_all(ctx, out);
-    if (rc) return rc;
+    if (rc || ctx->n_parts > 1 || ctx->keys) return rc; /* a part: first estimates only */
     if (o->speed_lags == 2 && o->method == SASNAV_METHOD_SUBSPACE && !ctx->lags && !o->reuse) {
         for (int j = 0; j < out->n_pairs; j++) out->pairs[j].first_verdict = out->pairs[j].result.verdict;
         ctx->lags = malloc(sizeof(double) * (size_t)n);
@@ -917,8 +969,10 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
     return rc;
 }
 
-int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
-                    sasnav_navigation *out)
+/* sasnav_navigate, or with keys != NULL the first estimates of one part
+ * (sasnav_navigate_part), their keys in keys[] (one per output pair). */
+static int navigate_run(const sasnav_run *run, const sasnav_navigate_opts *opts,
+                        sasnav_navigation *out, int part, int n_parts, uint64_t **keys)
 {
     if (!out) return sasnav_set_error(SASNAV_ERR_ARG, "navigate: NULL output");
     memset(out, 0, sizeof *out);
@@ -931,7 +985,11 @@ int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
     if (rc) return rc;
     nav_ctx ctx = {run, opts, NULL, 1, sasnav_now_seconds(),
                    run->array.n_rx > 1 ? 0.5 * fabs(run->array.rx_u[1] - run->array.rx_u[0]) : 0.025,
-                   NULL, NULL, 0, options_digest(run, opts)};
+                   NULL, NULL, 0, options_digest(run, opts), part, n_parts, NULL, NULL};
+    if (keys) {
+        ctx.keys = calloc((size_t)(2 * run->n_pings), sizeof *ctx.keys);
+        if (!ctx.keys) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    }
     out->method = opts->method;
     out->n_pings = run->n_pings;
     /* Threads: over pairs when there are several pairs (one estimator, or
@@ -947,7 +1005,11 @@ int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
         inner.nthreads = 1;
         ctx.opts = &inner;
     }
-    if (opts->method == SASNAV_METHOD_SUBSPACE) {
+    if (!run->raw) {
+        ctx.bufs = malloc(sizeof *ctx.bufs * 2 * (size_t)ctx.n_workers * sasnav_run_ping_size(run));
+        if (!ctx.bufs) rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for the pings in flight");
+    }
+    if (!rc && opts->method == SASNAV_METHOD_SUBSPACE) {
         sasnav_pair_opts po = opts->pair;
         po.range = run->range_of_interest;
         po.tx_lag = run->tx_lag;
@@ -968,15 +1030,62 @@ int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
     }
     if (!rc) rc = navigate(&ctx, out);
     free(ctx.done);
+    free(ctx.bufs);
     if (ctx.estimators)
         for (int t = 0; t < ctx.n_workers; t++) sasnav_pair_destroy(ctx.estimators[t]);
     free(ctx.estimators);
     free(ctx.lags);
     out->seconds = sasnav_now_seconds() - ctx.t0;
+    if (keys) *keys = ctx.keys;
     if (rc) {
+        if (keys) {
+            free(ctx.keys);
+            *keys = NULL;
+        }
         /* Keep the message of the failure across the frees. */
         sasnav_navigation_free(out);
         return rc;
     }
+    return SASNAV_OK;
+}
+
+int sasnav_navigate(const sasnav_run *run, const sasnav_navigate_opts *opts,
+                    sasnav_navigation *out)
+{
+    return navigate_run(run, opts, out, 0, 1, NULL);
+}
+
+int sasnav_navigate_part(const sasnav_run *run, const sasnav_navigate_opts *opts, int part,
+                         int n_parts, sasnav_pair_record **records, int *n_records)
+{
+    if (!records || !n_records) return sasnav_set_error(SASNAV_ERR_ARG, "navigate: NULL records");
+    *records = NULL;
+    *n_records = 0;
+    if (n_parts < 1 || part < 0 || part >= n_parts)
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigate: part %d of %d does not exist", part, n_parts);
+    sasnav_navigation nav;
+    uint64_t *keys = NULL;
+    int rc = navigate_run(run, opts, &nav, part, n_parts, &keys);
+    if (rc) return rc;
+    sasnav_pair_record *r = malloc(sizeof *r * (size_t)(nav.n_pairs > 0 ? nav.n_pairs : 1));
+    if (!r) {
+        free(keys);
+        sasnav_navigation_free(&nav);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    }
+    int n = 0;
+    for (int j = part; j < nav.n_pairs; j += n_parts) {
+        memset(&r[n], 0, sizeof r[n]);
+        r[n].key = keys[j];
+        r[n].p = nav.pairs[j].p;
+        r[n].q = nav.pairs[j].q;
+        r[n].status = nav.pairs[j].first_status;
+        r[n].result = nav.pairs[j].first_result;
+        n++;
+    }
+    free(keys);
+    sasnav_navigation_free(&nav);
+    *records = r;
+    *n_records = n;
     return SASNAV_OK;
 }

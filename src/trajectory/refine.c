@@ -331,6 +331,9 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const s
         sasnav_refine_default_opts(&o);
     int rc = check_opts(&o);
     if (!rc) rc = sasnav_run_check(run);
+    if (!rc && !run->raw)
+        rc = sasnav_set_error(SASNAV_ERR_ARG, "refine needs the run in memory (sasnav_run_read), "
+                                              "not streamed");
     if (rc) return rc;
     int n = run->n_pings;
     if (n < 3) return sasnav_set_error(SASNAV_ERR_ARG, "refinement needs at least 3 pings (got %d)", n);

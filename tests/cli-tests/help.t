@@ -78,6 +78,11 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       by K CGLS iterations instead of its backprojection
     --tikhonov L      Tikhonov weight of the CGLS inverse (default 0)
     -o FILE           output image file (HDF5)
+  
+  Any grid size: the backprojection runs in tiles of rows (about 180 MB of
+  operator each), the run read ping by ping. 'mpirun -np N sasnav image ...'
+  gives each process a band of rows; rank 0 writes the same image as one
+  process, bit for bit (docs/survey.md).
 
   $ sasnav pair --help
   usage: sasnav pair run.h5 [--p I --q J] [--json] [--k K] [--i I]
@@ -268,6 +273,12 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   
   Progress on stderr: a bar on a terminal, otherwise a line every 10 s
   (pairs done, rate, time left; SASNAV_PROGRESS_SECONDS sets the period).
+  
+  Survey scale: the run is read ping by ping (only the pings in flight are
+  in memory). 'mpirun -np N sasnav navigate ...' spreads the pairs over N
+  processes (one node or many); rank 0 gathers them and writes the same
+  navigation as one process, bit for bit (docs/survey.md). --threads then
+  counts per process; --checkpoint is for one process.
 
   $ sasnav refine --help
   usage: sasnav refine run.h5 nav.h5 -o refined.h5 [--grid X0,X1,NX,Y0,Y1,NY]

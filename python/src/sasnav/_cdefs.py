@@ -84,6 +84,15 @@ class AidingC(Structure):  # run.h
     ]
 
 
+class PingSourceC(Structure):  # run.h: a streamed run's reader (zero for runs in memory)
+    _c_name_ = "sasnav_ping_source"
+    _fields_ = [
+        ("read", c_void_p),
+        ("close", c_void_p),
+        ("ctx", c_void_p),
+    ]
+
+
 class RunC(Structure):  # run.h
     _c_name_ = "sasnav_run"
     _fields_ = [
@@ -99,6 +108,7 @@ class RunC(Structure):  # run.h
         ("tx_lag", c_double),
         ("range_of_interest", c_double),
         ("aiding", POINTER(AidingC)),
+        ("source", PingSourceC),
     ]
 
 
@@ -425,7 +435,7 @@ class NavigationC(Structure):  # navigate.h: struct sasnav_navigation
 
 # Every mirrored struct (checked by tests/test_layout.py).
 STRUCTS = [
-    Pose, PingPose, SensorArrayC, SystemC, Window, AidingC, RunC, GridC, OpOpts,
+    Pose, PingPose, SensorArrayC, SystemC, Window, AidingC, PingSourceC, RunC, GridC, OpOpts,
     CglsOpts, SceneC, RippleParams, TrajectoryParams, AidingParams, ScenarioC,
     PairOpts, PairCandidate, PairResult, DpcaOpts, NavigateProgress,
     NavigateOpts, NavigatePair, NavigationC,

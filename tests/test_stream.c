@@ -1,0 +1,257 @@
+/* Survey scale (docs/survey.md): streamed runs (sasnav_run_open) give the
+ * same pings, images and navigations as runs read whole; backprojection in
+ * tiles and bands of rows gives the same bits as one pass over the grid;
+ * the parts of a distributed navigation (sasnav_navigate_part) recombine
+ * into the same bits as one sasnav_navigate; a corrupt ping is an error
+ * that names it, when it is read. */
+#include "sasnav/error.h"
+#include "sasnav/image.h"
+#include "sasnav/io.h"
+#include "sasnav/navigate.h"
+#include "sasnav/sim.h"
+#include "testutil.h"
+
+#include <hdf5.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static sasnav_run *simulate(int n_pings, uint64_t seed)
+{
+    sasnav_scenario sc;
+    if (sasnav_scenario_preset("paper-trajectory", &sc)) return NULL;
+    sasnav_scenario_seed(&sc, seed);
+    sc.traj.n_pings = n_pings;
+    sc.traj.x_start = -0.5 * (n_pings - 1) * sc.traj.ping_spacing;
+    sc.snr_db = 30;
+    sasnav_run *run = NULL;
+    int rc = sasnav_simulate(&sc, NULL, NULL, &run);
+    CHECK(rc == 0, "simulation failed: %s", sasnav_last_error());
+    return rc ? NULL : run;
+}
+
+/* Streamed and whole runs hold the same pings, navigation and constants. */
+static void test_open_matches_read(const char *path, const sasnav_run *mem)
+{
+    sasnav_run *st = NULL;
+    CHECK_OK(sasnav_run_open(path, &st));
+    if (!st) return;
+    CHECK(st->raw == NULL && st->source.read, "a streamed run holds no samples");
+    CHECK(sasnav_run_ping(st, 0) == NULL, "sasnav_run_ping of a streamed run is NULL");
+    CHECK(st->n_pings == mem->n_pings && st->array.n_rx == mem->array.n_rx &&
+              st->win.n_samples == mem->win.n_samples,
+          "shape");
+    CHECK(!memcmp(st->nav, mem->nav, sizeof *st->nav * (size_t)st->n_pings), "navigation");
+    CHECK(st->truth && !memcmp(st->truth, mem->truth, sizeof *st->truth * (size_t)st->n_pings), "truth");
+    CHECK(st->tx_lag == mem->tx_lag && st->range_of_interest == mem->range_of_interest, "constants");
+    CHECK_OK(sasnav_run_check(st));
+    size_t n = sasnav_run_ping_size(st);
+    sasnav_cfloat *buf = malloc(sizeof *buf * n);
+    /* In a shuffled order: the source seeks. */
+    for (int k = 0; k < st->n_pings; k++) {
+        int p = (5 * k + 3) % st->n_pings;
+        const sasnav_cfloat *got = NULL;
+        CHECK_OK(sasnav_run_get_ping(st, p, buf, &got));
+        CHECK(got == buf && !memcmp(buf, sasnav_run_ping(mem, p), sizeof *buf * n), "ping %d differs", p);
+    }
+    const sasnav_cfloat *got = NULL;
+    CHECK(sasnav_run_get_ping(st, st->n_pings, buf, &got) == SASNAV_ERR_ARG && !got, "ping out of range");
+    CHECK(sasnav_run_get_ping(st, 0, NULL, &got) == SASNAV_ERR_ARG, "a streamed ping needs a buffer");
+    /* A subset of a streamed run is an in-memory run with the same pings. */
+    int pick[2] = {3, 1}, chan[2] = {5, 2};
+    sasnav_run *sub = NULL;
+    CHECK_OK(sasnav_run_subset(st, pick, 2, chan, 2, &sub));
+    if (sub) {
+        size_t ns = (size_t)st->win.n_samples;
+        for (int i = 0; i < 2; i++)
+            for (int l = 0; l < 2; l++)
+                CHECK(!memcmp(sasnav_run_ping(sub, i) + l * ns, sasnav_run_ping(mem, pick[i]) + chan[l] * ns,
+                              sizeof *buf * ns),
+                      "subset ping %d channel %d", i, l);
+    }
+    sasnav_run_free(sub);
+    free(buf);
+    sasnav_run_free(st);
+}
+
+/* Backprojection: streamed = in memory; bands of rows = the whole grid;
+ * a grid of several tiles (over SASNAV_BACKPROJECT_TILE_PAIRS pairs) = the
+ * same rows made as separate calls. */
+static void test_backprojection(const char *path, const sasnav_run *mem)
+{
+    sasnav_run *st = NULL;
+    CHECK_OK(sasnav_run_open(path, &st));
+    if (!st) return;
+    sasnav_op_opts oo;
+    sasnav_op_default_opts(&oo);
+    oo.nthreads = 1;
+#ifdef SASNAV_TEST_SANITIZED
+    int nx = 81, ny = 41;
+#else
+    /* 641 x 451 pixels x 16 channels = 4.6 M pairs: two tiles. */
+    int nx = 641, ny = 451;
+#endif
+    sasnav_grid g;
+    CHECK_OK(sasnav_grid_make(-1.6, 1.6, nx, 9.2, 10.8, ny, &g));
+    size_t np = (size_t)nx * (size_t)ny;
+    sasnav_cfloat *a = malloc(sizeof *a * np), *b = malloc(sizeof *b * np);
+    CHECK_OK(sasnav_backproject(mem, mem->truth, &g, &oo, a));
+    CHECK_OK(sasnav_backproject(st, st->truth, &g, &oo, b));
+    CHECK(!memcmp(a, b, sizeof *a * np), "streamed and in-memory backprojections differ");
+    double energy = 0;
+    for (size_t j = 0; j < np; j++) energy += crealf(a[j]) * crealf(a[j]) + cimagf(a[j]) * cimagf(a[j]);
+    CHECK(energy > 0, "the image is empty (the comparison would be void)");
+    /* Three uneven bands, each made alone. */
+    int cut[4] = {0, ny / 3, ny / 3 + 1, ny};
+    memset(b, 0, sizeof *b * np);
+    for (int k = 0; k < 3; k++)
+        CHECK_OK(sasnav_backproject_rows(st, st->truth, &g, cut[k], cut[k + 1], &oo, b + (size_t)cut[k] * nx,
+                                         NULL, NULL));
+    CHECK(!memcmp(a, b, sizeof *a * np), "bands of rows differ from the whole grid");
+    sasnav_cfloat dummy;
+    CHECK(sasnav_backproject_rows(st, st->truth, &g, 2, 2, &oo, &dummy, NULL, NULL) == SASNAV_ERR_ARG,
+          "an empty band is refused");
+    CHECK(sasnav_backproject_rows(st, st->truth, &g, 0, ny + 1, &oo, b, NULL, NULL) == SASNAV_ERR_ARG,
+          "rows beyond the grid are refused");
+    free(a);
+    free(b);
+    sasnav_run_free(st);
+}
+
+/* Parts of a navigation recombine into the same bits as one navigation. */
+static int nav_equal(const sasnav_navigation *x, const sasnav_navigation *y)
+{
+    if (x->n_pairs != y->n_pairs || x->n_pings != y->n_pings) return 0;
+    for (int j = 0; j < x->n_pairs; j++) {
+        const sasnav_navigate_pair *a = &x->pairs[j], *b = &y->pairs[j];
+        if (a->p != b->p || a->q != b->q || a->status != b->status || a->verdict != b->verdict ||
+            memcmp(&a->fused, &b->fused, sizeof a->fused) ||
+            memcmp(&a->result.error, &b->result.error, sizeof a->result.error))
+            return 0;
+    }
+    return !memcmp(x->nav, y->nav, sizeof *x->nav * (size_t)x->n_pings);
+}
+
+static void count_resumed(const sasnav_navigate_progress *pr, void *user)
+{
+    int *c = user;
+    if (pr->result) {
+        c[0]++;
+        c[1] += pr->resumed;
+    }
+}
+
+static void test_parts(const char *path, int method)
+{
+    sasnav_run *st = NULL;
+    CHECK_OK(sasnav_run_open(path, &st));
+    if (!st) return;
+    sasnav_navigate_opts o;
+    sasnav_navigate_default_opts(&o);
+    o.method = method;
+    o.nthreads = 1;
+    o.pair.k = 2; /* coarse: the equality, not the accuracy, is tested */
+    o.pair.i = 1;
+    o.long_baselines = method == SASNAV_METHOD_DPCA; /* consecutive and long pairs interleaved */
+    sasnav_navigation whole;
+    CHECK_OK(sasnav_navigate(st, &o, &whole));
+    const int n_parts = 3;
+    sasnav_pair_record *all = NULL;
+    int n_all = 0;
+    for (int part = 0; part < n_parts; part++) {
+        sasnav_pair_record *r = NULL;
+        int n = 0;
+        CHECK_OK(sasnav_navigate_part(st, &o, part, n_parts, &r, &n));
+        all = realloc(all, sizeof *all * (size_t)(n_all + n + 1));
+        if (n) memcpy(all + n_all, r, sizeof *r * (size_t)n);
+        n_all += n;
+        free(r);
+    }
+    CHECK(n_all == whole.n_pairs, "the parts hold %d pairs, the navigation %d", n_all, whole.n_pairs);
+    /* Recombined: no pair estimated again (each taken from a record). */
+    int counts[2] = {0, 0};
+    o.done = all;
+    o.n_done = n_all;
+    o.progress = count_resumed;
+    o.progress_user = counts;
+    sasnav_navigation joined;
+    CHECK_OK(sasnav_navigate(st, &o, &joined));
+    CHECK(counts[0] == n_all && counts[1] == n_all, "%d of %d pairs reported, %d resumed", counts[0], n_all,
+          counts[1]);
+    CHECK(nav_equal(&whole, &joined), "method %d: the recombined parts differ from one navigation", method);
+    sasnav_pair_record *r = NULL;
+    int n = 0;
+    CHECK(sasnav_navigate_part(st, &o, 3, 3, &r, &n) == SASNAV_ERR_ARG && !r, "part 3 of 3 is refused");
+    CHECK(sasnav_navigate_part(st, &o, 0, 0, &r, &n) == SASNAV_ERR_ARG, "0 parts are refused");
+    sasnav_navigation_free(&whole);
+    sasnav_navigation_free(&joined);
+    free(all);
+    sasnav_run_free(st);
+}
+
+/* A ping made non-finite in the file: opening succeeds (the samples are
+ * not read), reading that ping fails naming it, the other pings read, and
+ * a navigation stops with the message, without a crash. */
+static void test_corrupt_ping(const char *path)
+{
+    hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+    hid_t d = H5Dopen2(f, "/raw", H5P_DEFAULT);
+    hid_t fs = H5Dget_space(d);
+    hsize_t start[3] = {2, 3, 10}, count[3] = {1, 1, 1};
+    H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, count, NULL);
+    hid_t ms = H5Screate_simple(3, count, NULL);
+    hid_t t = H5Tcreate(H5T_COMPOUND, 2 * sizeof(float));
+    H5Tinsert(t, "r", 0, H5T_NATIVE_FLOAT);
+    H5Tinsert(t, "i", sizeof(float), H5T_NATIVE_FLOAT);
+    float v[2] = {NAN, 0};
+    CHECK(H5Dwrite(d, t, ms, fs, H5P_DEFAULT, v) >= 0, "could not corrupt the file");
+    H5Tclose(t);
+    H5Sclose(ms);
+    H5Sclose(fs);
+    H5Dclose(d);
+    H5Fclose(f);
+
+    sasnav_run *st = NULL;
+    CHECK_OK(sasnav_run_open(path, &st));
+    if (!st) return;
+    sasnav_cfloat *buf = malloc(sizeof *buf * sasnav_run_ping_size(st));
+    const sasnav_cfloat *got = NULL;
+    CHECK_OK(sasnav_run_get_ping(st, 1, buf, &got));
+    int rc = sasnav_run_get_ping(st, 2, buf, &got);
+    CHECK(rc == SASNAV_ERR_FORMAT && strstr(sasnav_last_error(), "ping 2") &&
+              strstr(sasnav_last_error(), "channel 3") && strstr(sasnav_last_error(), path),
+          "corrupt ping: %d %s", rc, sasnav_last_error());
+    sasnav_navigate_opts o;
+    sasnav_navigate_default_opts(&o);
+    o.method = SASNAV_METHOD_DPCA;
+    sasnav_navigation nav;
+    rc = sasnav_navigate(st, &o, &nav);
+    CHECK(rc == SASNAV_ERR_FORMAT && strstr(sasnav_last_error(), "ping 2"), "navigate over a corrupt ping: %d %s",
+          rc, sasnav_last_error());
+    sasnav_run *whole = NULL;
+    CHECK(sasnav_run_read(path, &whole) == SASNAV_ERR_FORMAT && !whole, "the whole read refuses it too");
+    free(buf);
+    sasnav_run_free(st);
+}
+
+int main(void)
+{
+    sasnav_run *mem = simulate(6, 7);
+    if (!mem) return test_summary("test_stream");
+    char path[1024];
+    snprintf(path, sizeof path, "%s/run.h5", test_tmpdir());
+    CHECK_OK(sasnav_run_write(path, mem));
+    test_open_matches_read(path, mem);
+    test_backprojection(path, mem);
+    test_parts(path, SASNAV_METHOD_DPCA);
+#ifndef SASNAV_TEST_SANITIZED
+    test_parts(path, SASNAV_METHOD_SUBSPACE);
+#endif
+    test_corrupt_ping(path);
+    sasnav_run *absent = NULL;
+    snprintf(path, sizeof path, "%s/absent.h5", test_tmpdir());
+    CHECK(sasnav_run_open(path, &absent) != SASNAV_OK && !absent, "a missing file is refused");
+    sasnav_run_free(mem);
+    return test_summary("test_stream");
+}
