@@ -54,16 +54,25 @@ int sasnav_backproject_progress(const sasnav_run *run, const sasnav_ping_pose *n
                                 sasnav_cfloat *image, sasnav_ping_progress_fn progress, void *user);
 
 /* Backprojection in tiles of at most this many (pixel, channel) pairs
- * (about 44 bytes of operator memory each: some 180 MB per tile), whole
- * rows of the grid each; every tile goes over all pings. */
+ * (about 44 bytes of operator memory each: some 180 MB per tile; square
+ * tiles of 512 x 512 pixels with 16 channels). */
 #define SASNAV_BACKPROJECT_TILE_PAIRS (1L << 22)
 
-/* Rows row0 .. row1 - 1 of the backprojection on `grid` (image holds nx *
- * (row1 - row0) values, row row0 first): the same bits as those rows of
- * sasnav_backproject on the whole grid, whatever the split (tiles,
- * processes of a distributed image). The run may be streamed
- * (sasnav_run_open): its pings are then read once per tile. progress
- * counts (tile, ping) steps. */
+/* Pixels col0 .. col1 - 1 x rows row0 .. row1 - 1 of the backprojection on
+ * `grid` into image ((col1 - col0) x (row1 - row0) values, row-major, the
+ * first row first): the same bits as those pixels of sasnav_backproject on
+ * the whole grid, whatever the split (tiles, processes of a distributed
+ * image). Made in tiles of SASNAV_BACKPROJECT_TILE_PAIRS pairs, each with
+ * only the pings whose echoes can reach it (the others would add exact
+ * zeros): the cost of a survey grows with its length, not its square. The
+ * run may be streamed (sasnav_run_open): each tile reads the pings it
+ * needs. progress counts (tile, ping) steps. */
+int sasnav_backproject_tile(const sasnav_run *run, const sasnav_ping_pose *nav,
+                            const sasnav_grid *grid, int col0, int col1, int row0, int row1,
+                            const sasnav_op_opts *opts, sasnav_cfloat *image,
+                            sasnav_ping_progress_fn progress, void *user);
+
+/* sasnav_backproject_tile over whole rows row0 .. row1 - 1. */
 int sasnav_backproject_rows(const sasnav_run *run, const sasnav_ping_pose *nav,
                             const sasnav_grid *grid, int row0, int row1,
                             const sasnav_op_opts *opts, sasnav_cfloat *image,

@@ -110,6 +110,10 @@ double sasnav_op_period(const sasnav_op *op);
 /* Number of (point, channel) pairs whose delay fell outside the periodic grid
  * at the last set_geometry (they contribute nothing). */
 long sasnav_op_n_dropped(const sasnav_op *op);
+/* The bistatic delays (s) a pair may have and be kept: a point whose delay
+ * to every channel lies outside [*first, *last] contributes nothing (to T,
+ * nor through T^H). Depends on the window and options only. */
+void sasnav_op_delay_span(const sasnav_op *op, double *first, double *last);
 /* Kernel width (taps) chosen for the requested tolerance. */
 int sasnav_op_kernel_width(const sasnav_op *op);
 

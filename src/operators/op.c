@@ -1013,4 +1013,12 @@ int sasnav_op_n_rx(const sasnav_op *op) { return op ? op->n_rx : 0; }
 int sasnav_op_n_samples(const sasnav_op *op) { return op ? op->n_samples : 0; }
 double sasnav_op_period(const sasnav_op *op) { return op ? op->period : 0.0; }
 long sasnav_op_n_dropped(const sasnav_op *op) { return op ? op->n_dropped : 0; }
+
+void sasnav_op_delay_span(const sasnav_op *op, double *first, double *last)
+{
+    /* setup_block keeps u = (tau - grid_start) / h in [w/2, lf - w/2]. */
+    double half = 0.5 * op->kernel.width;
+    *first = op->grid_start + half * op->h;
+    *last = op->grid_start + (op->lf - half) * op->h;
+}
 int sasnav_op_kernel_width(const sasnav_op *op) { return op ? op->kernel.width : 0; }
