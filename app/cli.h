@@ -74,6 +74,12 @@ int cli_mpi_any(int failed, int *rank0_failed);
  * rank 0 (*all malloc'd, *n_all bytes; NULL elsewhere). Returns 0, or 1
  * on every rank when it could not be done (out of memory). */
 int cli_mpi_gather(const void *mine, size_t n, void **all, size_t *n_all);
+/* Blocking transfers of n bytes between two ranks (no-ops in one process). */
+void cli_mpi_send(int dest, const void *buf, size_t n);
+void cli_mpi_recv(int src, void *buf, size_t n);
+/* Ends the whole job with `code` (every rank), after a failure that other
+ * ranks may be waiting on. */
+void cli_mpi_abort(int code);
 
 /* SIGINT / SIGTERM / SIGHUP remove partial outputs, then end the process;
  * SIGXFSZ is ignored (app/signals.c). */

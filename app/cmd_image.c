@@ -85,6 +85,90 @@ static int image_one_ping(const sasnav_run *run, const sasnav_ping_pose *pose, i
     return rc;
 }
 
+/* Images larger than this are written but not drawn (--png). */
+#define PNG_MAX_PIXELS 67108864.0
+
+/* The backprojection in tiles (each rank of an MPI job makes the tiles t
+ * with t % ranks == rank, in order; rank 0 writes every tile as it comes,
+ * so no process holds more than a tile). Returns 0, or a CLI status after
+ * a message. */
+static int image_tiles(const char *output, const sasnav_run *run, const sasnav_ping_pose *nav,
+                       const sasnav_grid *g, const sasnav_op_opts *oo)
+{
+    int ranks = cli_mpi_size(), rank = cli_mpi_rank();
+    int side = (int)floor(sqrt((double)SASNAV_BACKPROJECT_TILE_PAIRS / run->array.n_rx));
+    if (side < 1) side = 1;
+    int tw = g->nx < side ? g->nx : side, th = g->ny < side ? g->ny : side;
+    int ntx = (g->nx + tw - 1) / tw;
+    if (ranks > 1) {
+        /* At least four tiles per rank, for balance. */
+        int rows_wanted = (4 * ranks + ntx - 1) / ntx;
+        int h = (g->ny + rows_wanted - 1) / rows_wanted;
+        if (h < th) th = h > 0 ? h : 1;
+    }
+    int nty = (g->ny + th - 1) / th;
+    long ntiles = (long)ntx * nty;
+    sasnav_cfloat *buf = malloc(sizeof *buf * (size_t)tw * (size_t)th);
+    sasnav_image_writer *w = NULL;
+    int rc = buf ? SASNAV_OK : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for a tile");
+    if (!rc && rank == 0) rc = sasnav_image_writer_open(output, g, tw, th, &w);
+    int rank0_failed;
+    if (cli_mpi_any(rc != 0, &rank0_failed)) {
+        free(buf);
+        sasnav_image_writer_abort(w);
+        return rc && (rank == 0 || !rank0_failed) ? cli_fail("image", rc, "cannot write %s", output) : CLI_FAILURE;
+    }
+    cli_progress prog;
+    cli_progress_init(&prog, "image", "tiles");
+    cli_progress_update(&prog, 0, (int)ntiles);
+    for (long t = 0; t < ntiles; t++) {
+        int owner = (int)(t % ranks);
+        int c0 = (int)(t % ntx) * tw, r0 = (int)(t / ntx) * th;
+        int c1 = c0 + tw < g->nx ? c0 + tw : g->nx, r1 = r0 + th < g->ny ? r0 + th : g->ny;
+        size_t bytes = sizeof *buf * (size_t)(c1 - c0) * (size_t)(r1 - r0);
+        if (owner == rank) {
+            rc = sasnav_backproject_tile(run, nav, g, c0, c1, r0, r1, oo, buf, NULL, NULL);
+            if (rc) cli_fail("image", rc, "backprojection failed");
+            if (rank != 0) {
+                int st = rc;
+                cli_mpi_send(0, &st, sizeof st);
+                if (rc) break;
+                cli_mpi_send(0, buf, bytes);
+                continue;
+            }
+        } else if (rank == 0) {
+            int st = 0;
+            cli_mpi_recv(owner, &st, sizeof st);
+            if (st) {
+                rc = CLI_FAILURE;
+                fprintf(stderr, "sasnav image: rank %d failed (above): %s not written\n", owner, output);
+            } else {
+                cli_mpi_recv(owner, buf, bytes);
+            }
+        } else {
+            continue;
+        }
+        /* rank 0 */
+        if (!rc) {
+            rc = sasnav_image_writer_put(w, c0, c1, r0, r1, buf);
+            if (rc) cli_fail("image", rc, "cannot write %s", output);
+        }
+        if (rc) break;
+        cli_progress_update(&prog, (int)(t + 1), (int)ntiles);
+    }
+    cli_progress_end(&prog);
+    free(buf);
+    if (rank != 0) return rc ? CLI_FAILURE : 0;
+    if (rc) {
+        sasnav_image_writer_abort(w);
+        if (ranks > 1) cli_mpi_abort(CLI_FAILURE); /* the others may wait on a send */
+        return CLI_FAILURE;
+    }
+    rc = sasnav_image_writer_finish(w);
+    if (rc) return cli_fail("image", rc, "cannot write %s", output);
+    return 0;
+}
+
 int cmd_image(int argc, char **argv)
 {
     static const struct option longopts[] = {
@@ -179,76 +263,47 @@ int cmd_image(int argc, char **argv)
         sasnav_run_free(run);
         return cli_fail("image", rc, "default grid");
     }
-    /* Under mpirun each rank makes a band of rows; rank 0 gathers them. */
-    int row0 = (int)((long)grid.ny * rank / ranks), row1 = (int)((long)grid.ny * (rank + 1) / ranks);
-    if (ranks > grid.ny) {
-        free(own_nav);
-        sasnav_run_free(run);
-        return rank == 0 ? cli_fail("image", 0, "%d processes for %d image rows: use at most one per row",
-                                    ranks, grid.ny)
-                         : CLI_FAILURE;
-    }
-    sasnav_cfloat *image = malloc(sizeof(sasnav_cfloat) * (size_t)grid.nx * (size_t)(row1 - row0));
-    if (!image) {
-        free(own_nav);
-        sasnav_run_free(run);
-        return cli_fail("image", 0, "out of memory for a %d x %d image", grid.ny, grid.nx);
-    }
     sasnav_op_opts oo;
     sasnav_op_default_opts(&oo);
     oo.nthreads = (int)threads;
     if (ping >= run->n_pings) {
-        free(image);
         free(own_nav);
         int n = run->n_pings;
         sasnav_run_free(run);
         return cli_fail("image", 0, "--ping %ld: the run has %d pings", ping, n);
     }
-    if (ping >= 0)
-        rc = image_one_ping(run, &nav[ping], (int)ping, &grid, &oo, (int)cgls, tikhonov, image);
-    else {
-        cli_progress prog;
-        cli_progress_init(&prog, "image", "pings");
-        rc = sasnav_backproject_rows(run, nav, &grid, row0, row1, &oo, image, cli_ping_progress, &prog);
-        cli_progress_end(&prog);
-    }
-    free(own_nav);
-    sasnav_run_free(run);
-    if (ranks > 1) {
-        if (cli_mpi_any(rc != 0, &rank0_failed)) {
-            free(image);
-            return rc && (rank == 0 || !rank0_failed) ? cli_fail("image", rc, "backprojection failed")
-                                                      : CLI_FAILURE;
-        }
-        void *all = NULL;
-        size_t bytes = 0;
-        rc = cli_mpi_gather(image, sizeof(sasnav_cfloat) * (size_t)grid.nx * (size_t)(row1 - row0), &all,
-                            &bytes);
+    if (ping >= 0) {
+        /* One ping, one process: the whole image in memory. */
+        sasnav_cfloat *image = malloc(sizeof(sasnav_cfloat) * (size_t)grid.nx * (size_t)grid.ny);
+        rc = image ? image_one_ping(run, &nav[ping], (int)ping, &grid, &oo, (int)cgls, tikhonov, image)
+                   : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for a %d x %d image", grid.ny, grid.nx);
+        free(own_nav);
+        sasnav_run_free(run);
+        if (!rc) rc = sasnav_image_write(output, &grid, image);
         free(image);
-        if (rc) return rank == 0 ? cli_fail("image", 0, "out of memory gathering the image") : CLI_FAILURE;
+        if (rc) return cli_fail("image", rc, "cannot make %s", output);
+    } else {
+        rc = image_tiles(output, run, nav, &grid, &oo);
+        free(own_nav);
+        sasnav_run_free(run);
+        if (rc) return rc;
         if (rank != 0) return 0;
-        image = all;
-    }
-    if (rc) {
-        free(image);
-        return cli_fail("image", rc, "backprojection failed");
-    }
-    rc = sasnav_image_write(output, &grid, image);
-    if (rc) {
-        free(image);
-        return cli_fail("image", rc, "cannot write %s", output);
     }
     if (png) {
         char title[256];
         snprintf(title, sizeof title, "%s (%s navigation)", input,
                  use_truth ? "true" : navfile ? navfile : "nominal");
-        rc = sasnav_plot_image_db(png, &grid, image, dr, title);
-        if (rc) {
-            free(image);
-            return cli_fail("image", rc, "cannot write %s", png);
-        }
+        if ((double)grid.nx * grid.ny > PNG_MAX_PIXELS)
+            return cli_fail("image", 0, "%s is written; a %d x %d image is too large for --png (at most %.0f "
+                                        "pixels: crop it with --grid)",
+                            output, grid.ny, grid.nx, PNG_MAX_PIXELS);
+        sasnav_grid g2;
+        sasnav_cfloat *image = NULL;
+        rc = sasnav_image_read(output, &g2, &image);
+        if (!rc) rc = sasnav_plot_image_db(png, &g2, image, dr, title);
+        free(image);
+        if (rc) return cli_fail("image", rc, "cannot write %s", png);
     }
-    free(image);
     fprintf(stderr, "sasnav image: %d x %d pixels -> %s%s%s\n", grid.ny, grid.nx, output,
             png ? ", " : "", png ? png : "");
     return 0;

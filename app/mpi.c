@@ -142,3 +142,34 @@ int cli_mpi_gather(const void *mine, size_t n, void **all, size_t *n_all)
     return 1;
 #endif
 }
+
+/* Blocking point-to-point transfers of n bytes (n < 2 GB: one tile). */
+void cli_mpi_send(int dest, const void *buf, size_t n)
+{
+#ifdef SASNAV_HAVE_MPI
+    if (mpi_active) MPI_Send(buf, (int)n, MPI_BYTE, dest, 0, MPI_COMM_WORLD);
+#else
+    (void)dest;
+    (void)buf;
+    (void)n;
+#endif
+}
+
+void cli_mpi_recv(int src, void *buf, size_t n)
+{
+#ifdef SASNAV_HAVE_MPI
+    if (mpi_active) MPI_Recv(buf, (int)n, MPI_BYTE, src, 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+#else
+    (void)src;
+    (void)buf;
+    (void)n;
+#endif
+}
+
+void cli_mpi_abort(int code)
+{
+#ifdef SASNAV_HAVE_MPI
+    if (mpi_active) MPI_Abort(MPI_COMM_WORLD, code);
+#endif
+    exit(code);
+}

@@ -51,6 +51,35 @@ int sasnav_nav_read(const char *path, int *n_pings, sasnav_ping_pose **nav,
 
 /* Complex image: /image [ny][nx] compound {r, i} float32, /x [nx], /y [ny]. */
 int sasnav_image_write(const char *path, const sasnav_grid *grid, const sasnav_cfloat *image);
+
+/* An image file written block by block (a survey's image is made in tiles
+ * and need not be held whole): the same file as sasnav_image_write once
+ * every pixel has been put (pixels never put are undefined). open creates
+ * a temporary file beside `path` (tile_cols x tile_rows: the HDF5 chunk
+ * shape, 0 = the whole grid, capped); put writes the block of columns
+ * col0 .. col1 - 1 and rows row0 .. row1 - 1 (row-major, finite values);
+ * finish renames the file into place and frees the writer; abort removes
+ * it and frees. Not thread-safe (serial HDF5). */
+typedef struct sasnav_image_writer sasnav_image_writer;
+int sasnav_image_writer_open(const char *path, const sasnav_grid *grid, int tile_cols, int tile_rows,
+                             sasnav_image_writer **writer);
+int sasnav_image_writer_put(sasnav_image_writer *writer, int col0, int col1, int row0, int row1,
+                            const sasnav_cfloat *block);
+int sasnav_image_writer_finish(sasnav_image_writer *writer);
+void sasnav_image_writer_abort(sasnav_image_writer *writer);
+
+/* A run file written ping by ping (a long simulation need not be held
+ * whole): open with the run's shape (sys, array, win, n_pings of
+ * `header`; its samples and navigation are not used), put each ping's
+ * samples (any order; get reads one back), then finish with the run's
+ * header (navigation, truth, aiding, constants; raw may be NULL): the same
+ * file as sasnav_run_write. finish and abort free the writer. */
+typedef struct sasnav_run_writer sasnav_run_writer;
+int sasnav_run_writer_open(const char *path, const sasnav_run *header, sasnav_run_writer **writer);
+int sasnav_run_writer_put(sasnav_run_writer *writer, int p, const sasnav_cfloat *samples);
+int sasnav_run_writer_get(sasnav_run_writer *writer, int p, sasnav_cfloat *samples);
+int sasnav_run_writer_finish(sasnav_run_writer *writer, const sasnav_run *header);
+void sasnav_run_writer_abort(sasnav_run_writer *writer);
 /* Allocates *image (nx * ny values); free with free(). */
 int sasnav_image_read(const char *path, sasnav_grid *grid, sasnav_cfloat **image);
 

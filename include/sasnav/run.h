@@ -113,6 +113,10 @@ size_t sasnav_run_ping_size(const sasnav_run *run);
  * each ping is read (by its source), not here. */
 int sasnav_run_check(const sasnav_run *run);
 
+/* sasnav_run_check without the samples (a run's header: shapes,
+ * constants, navigation, truth, aiding; raw and source may be absent). */
+int sasnav_run_check_header(const sasnav_run *run);
+
 /* A new in-memory run holding pings[0..n_pings-1] of `run` (in that order; read from its source when `run` is streamed) and, when
  * `channels` is not NULL, only channels[0..n_channels-1] (the array keeps
  * those receivers' positions); navigation, truth and the run's constants

@@ -236,7 +236,13 @@ static int poses_check(const sasnav_ping_pose *poses, int n, const char *what)
     return SASNAV_OK;
 }
 
-int sasnav_run_check(const sasnav_run *run)
+static int run_check(const sasnav_run *run, int samples);
+
+int sasnav_run_check(const sasnav_run *run) { return run_check(run, 1); }
+
+int sasnav_run_check_header(const sasnav_run *run) { return run_check(run, 0); }
+
+static int run_check(const sasnav_run *run, int samples)
 {
     if (!run) return sasnav_set_error(SASNAV_ERR_ARG, "run is NULL");
     int rc = sasnav_system_check(&run->sys);
@@ -249,7 +255,7 @@ int sasnav_run_check(const sasnav_run *run)
         return sasnav_set_error(SASNAV_ERR_ARG, "run needs >= 1 ping, got %d", run->n_pings);
     size_t n = run_sample_count(run->n_pings, run->array.n_rx, run->win.n_samples);
     if (n == 0) return sasnav_set_error(SASNAV_ERR_ARG, "run dimensions overflow");
-    if ((!run->raw && !run->source.read) || !run->nav)
+    if ((samples && !run->raw && !run->source.read) || !run->nav)
         return sasnav_set_error(SASNAV_ERR_ARG, "run data or navigation is NULL");
     if (!isfinite(run->ping_spacing) || !isfinite(run->tx_lag))
         return sasnav_set_error(SASNAV_ERR_ARG, "ping spacing and Tx lag must be finite");
@@ -281,7 +287,7 @@ int sasnav_run_check(const sasnav_run *run)
     rc = sasnav_aiding_check(run->aiding, run->n_pings);
     if (rc) return rc;
     const float *v = (const float *)run->raw; /* C11 6.2.5: complex = float[2] */
-    for (size_t k = 0; v && k < 2 * n; k++)
+    for (size_t k = 0; samples && v && k < 2 * n; k++)
         if (!isfinite(v[k])) {
             size_t s = k / 2, per_ping = n / (size_t)run->n_pings;
             return sasnav_set_error(SASNAV_ERR_ARG,

@@ -210,6 +210,201 @@ int sasnav_run_write(const char *path, const sasnav_run *run)
     return rc;
 }
 
+static double *axis_values(double v0, double d, int n)
+{
+    double *v = malloc((size_t)n * sizeof *v);
+    if (v)
+        for (int k = 0; k < n; k++) v[k] = v0 + k * d;
+    return v;
+}
+
+/* --- runs written ping by ping -------------------------------------------- */
+
+struct sasnav_run_writer {
+    h5_ctx c;
+    char *path;
+    hid_t raw;
+    sasnav_run header; /* shapes only (sys, array, win, n_pings) */
+    size_t per_ping;
+};
+
+int sasnav_run_writer_open(const char *path, const sasnav_run *header, sasnav_run_writer **out)
+{
+    if (!out) return sasnav_set_error(SASNAV_ERR_ARG, "run writer output pointer is NULL");
+    *out = NULL;
+    if (!path || !header) return sasnav_set_error(SASNAV_ERR_ARG, "run writer needs a path and a header");
+    int rc = sasnav_system_check(&header->sys);
+    if (!rc) rc = sasnav_array_check(&header->array);
+    if (rc) return rc;
+    if (header->n_pings < 1 || header->win.n_samples < 1)
+        return sasnav_set_error(SASNAV_ERR_ARG, "run writer needs >= 1 ping and >= 1 sample");
+    sasnav_run_writer *w = calloc(1, sizeof *w);
+    char *copy = w ? strdup(path) : NULL;
+    if (!w || !copy) {
+        free(w);
+        free(copy);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    }
+    w->path = copy;
+    w->raw = H5I_INVALID_HID;
+    w->header = *header;
+    w->header.raw = NULL;
+    w->header.nav = w->header.truth = NULL;
+    w->header.aiding = NULL;
+    memset(&w->header.source, 0, sizeof w->header.source);
+    w->per_ping = (size_t)header->array.n_rx * (size_t)header->win.n_samples;
+    h5_begin(&w->c, w->path);
+    rc = h5_create_tmp(&w->c, "sasnav-run");
+    hsize_t dims[3] = {(hsize_t)header->n_pings, (hsize_t)header->array.n_rx,
+                       (hsize_t)header->win.n_samples};
+    hsize_t chunk[3] = {1, dims[1], dims[2]};
+    if (!rc) rc = h5_create_dataset(&w->c, "/raw", H5_COMPLEX, 3, dims, chunk, "1", &w->raw);
+    if (rc) {
+        sasnav_run_writer_abort(w);
+        return rc;
+    }
+    *out = w;
+    return SASNAV_OK;
+}
+
+int sasnav_run_writer_put(sasnav_run_writer *w, int p, const sasnav_cfloat *samples)
+{
+    if (!w || !samples || p < 0 || p >= w->header.n_pings)
+        return sasnav_set_error(SASNAV_ERR_ARG, "run writer: bad ping %d", p);
+    size_t bad;
+    if (!floats_finite((const float *)samples, 2 * w->per_ping, &bad))
+        return sasnav_set_error(SASNAV_ERR_ARG, "ping %d to write: sample %zu of channel %zu is not finite", p,
+                                bad / 2 % (size_t)w->header.win.n_samples,
+                                bad / 2 / (size_t)w->header.win.n_samples);
+    hsize_t start[3] = {(hsize_t)p, 0, 0},
+            count[3] = {1, (hsize_t)w->header.array.n_rx, (hsize_t)w->header.win.n_samples};
+    return h5_write_block(&w->c, w->raw, "/raw", H5_COMPLEX, 3, start, count, samples);
+}
+
+int sasnav_run_writer_get(sasnav_run_writer *w, int p, sasnav_cfloat *samples)
+{
+    if (!w || !samples || p < 0 || p >= w->header.n_pings)
+        return sasnav_set_error(SASNAV_ERR_ARG, "run writer: bad ping %d", p);
+    return h5_read_rows(&w->c, w->raw, "/raw", H5_COMPLEX, (hsize_t)p, 1, samples);
+}
+
+int sasnav_run_writer_finish(sasnav_run_writer *w, const sasnav_run *run)
+{
+    if (!w) return sasnav_set_error(SASNAV_ERR_ARG, "run writer is NULL");
+    int rc = run ? SASNAV_OK : sasnav_set_error(SASNAV_ERR_ARG, "run writer: no run to finish with");
+    if (!rc && (run->n_pings != w->header.n_pings || run->array.n_rx != w->header.array.n_rx ||
+                run->win.n_samples != w->header.win.n_samples))
+        rc = sasnav_set_error(SASNAV_ERR_ARG, "run writer: the run's shape differs from the one opened");
+    if (!rc) rc = sasnav_run_check_header(run);
+    if (!rc) {
+        H5Dclose(w->raw);
+        w->raw = H5I_INVALID_HID;
+        rc = system_write(&w->c, run);
+    }
+    if (!rc) rc = array_write(&w->c, &run->array);
+    if (!rc) rc = poses_write(&w->c, "/nav", run->n_pings, run->nav);
+    if (!rc && run->truth) rc = poses_write(&w->c, "/truth", run->n_pings, run->truth);
+    if (!rc && run->aiding) rc = aiding_write(&w->c, run->n_pings, run->aiding);
+    if (!rc) rc = h5_commit(&w->c);
+    sasnav_run_writer_abort(w); /* frees; after a commit nothing is left to remove */
+    return rc;
+}
+
+void sasnav_run_writer_abort(sasnav_run_writer *w)
+{
+    if (!w) return;
+    if (w->raw >= 0) H5Dclose(w->raw);
+    h5_end(&w->c); /* closes the file, removes the temporary one if any */
+    free(w->path);
+    free(w);
+}
+
+/* --- images written tile by tile ------------------------------------------- */
+
+struct sasnav_image_writer {
+    h5_ctx c;
+    char *path;
+    hid_t image;
+    sasnav_grid grid;
+};
+
+int sasnav_image_writer_open(const char *path, const sasnav_grid *grid, int tile_cols, int tile_rows,
+                             sasnav_image_writer **out)
+{
+    if (!out) return sasnav_set_error(SASNAV_ERR_ARG, "image writer output pointer is NULL");
+    *out = NULL;
+    if (!path) return sasnav_set_error(SASNAV_ERR_ARG, "image writer needs a path");
+    int rc = sasnav_grid_check(grid);
+    if (rc) return rc;
+    sasnav_image_writer *w = calloc(1, sizeof *w);
+    char *copy = w ? strdup(path) : NULL;
+    double *x = axis_values(grid->x0, grid->dx, grid->nx), *y = axis_values(grid->y0, grid->dy, grid->ny);
+    if (!w || !copy || !x || !y) {
+        free(w);
+        free(copy);
+        free(x);
+        free(y);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    }
+    w->path = copy;
+    w->image = H5I_INVALID_HID;
+    w->grid = *grid;
+    h5_begin(&w->c, w->path);
+    hsize_t dims[2] = {(hsize_t)grid->ny, (hsize_t)grid->nx};
+    hsize_t chunk[2] = {(hsize_t)(tile_rows > 0 && tile_rows < grid->ny ? tile_rows : grid->ny),
+                        (hsize_t)(tile_cols > 0 && tile_cols < grid->nx ? tile_cols : grid->nx)};
+    rc = h5_create_tmp(&w->c, "sasnav-image");
+    if (!rc) rc = h5_create_dataset(&w->c, "/image", H5_COMPLEX, 2, dims, chunk, "1", &w->image);
+    if (!rc) rc = h5_write_attr_double(&w->c, "/image", "x0", grid->x0);
+    if (!rc) rc = h5_write_attr_double(&w->c, "/image", "dx", grid->dx);
+    if (!rc) rc = h5_write_attr_double(&w->c, "/image", "y0", grid->y0);
+    if (!rc) rc = h5_write_attr_double(&w->c, "/image", "dy", grid->dy);
+    if (!rc) rc = h5_write_dataset(&w->c, "/x", H5_REAL, 1, &dims[1], NULL, x, "m");
+    if (!rc) rc = h5_write_dataset(&w->c, "/y", H5_REAL, 1, &dims[0], NULL, y, "m");
+    free(x);
+    free(y);
+    if (rc) {
+        sasnav_image_writer_abort(w);
+        return rc;
+    }
+    *out = w;
+    return SASNAV_OK;
+}
+
+int sasnav_image_writer_put(sasnav_image_writer *w, int col0, int col1, int row0, int row1,
+                            const sasnav_cfloat *tile)
+{
+    if (!w || !tile || col0 < 0 || row0 < 0 || col1 > w->grid.nx || row1 > w->grid.ny || col0 >= col1 ||
+        row0 >= row1)
+        return sasnav_set_error(SASNAV_ERR_ARG, "image writer: block %d..%d x %d..%d outside the grid", col0,
+                                col1 - 1, row0, row1 - 1);
+    size_t bad, n = (size_t)(col1 - col0) * (size_t)(row1 - row0);
+    if (!floats_finite((const float *)tile, 2 * n, &bad))
+        return sasnav_set_error(SASNAV_ERR_ARG, "image pixel (%zu, %zu) is not finite",
+                                row0 + bad / 2 / (size_t)(col1 - col0), col0 + bad / 2 % (size_t)(col1 - col0));
+    hsize_t start[2] = {(hsize_t)row0, (hsize_t)col0}, count[2] = {(hsize_t)(row1 - row0), (hsize_t)(col1 - col0)};
+    return h5_write_block(&w->c, w->image, "/image", H5_COMPLEX, 2, start, count, tile);
+}
+
+int sasnav_image_writer_finish(sasnav_image_writer *w)
+{
+    if (!w) return sasnav_set_error(SASNAV_ERR_ARG, "image writer is NULL");
+    H5Dclose(w->image);
+    w->image = H5I_INVALID_HID;
+    int rc = h5_commit(&w->c);
+    sasnav_image_writer_abort(w);
+    return rc;
+}
+
+void sasnav_image_writer_abort(sasnav_image_writer *w)
+{
+    if (!w) return;
+    if (w->image >= 0) H5Dclose(w->image);
+    h5_end(&w->c);
+    free(w->path);
+    free(w);
+}
+
 /* An integer attribute that must lie in [lo, hi]. */
 static int attr_int_range(h5_ctx *c, const char *obj, const char *name, int lo, int hi, int *value)
 {
@@ -457,13 +652,6 @@ int sasnav_nav_read(const char *path, int *n_pings, sasnav_ping_pose **nav, sasn
 
 /* --- images ------------------------------------------------------------------ */
 
-static double *axis_values(double v0, double d, int n)
-{
-    double *v = malloc((size_t)n * sizeof *v);
-    if (v)
-        for (int k = 0; k < n; k++) v[k] = v0 + k * d;
-    return v;
-}
 
 int sasnav_image_write(const char *path, const sasnav_grid *grid, const sasnav_cfloat *image)
 {

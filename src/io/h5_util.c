@@ -717,15 +717,16 @@ static void chunk_shape(int rank, const hsize_t *dims, size_t elem, hsize_t *chu
     }
 }
 
-int h5_write_dataset(h5_ctx *c, const char *name, int kind, int rank, const hsize_t *dims,
-                     const hsize_t *chunk_hint, const void *data, const char *units)
+int h5_create_dataset(h5_ctx *c, const char *name, int kind, int rank, const hsize_t *dims,
+                      const hsize_t *chunk_hint, const char *units, hid_t *out)
 {
     int rc = SASNAV_OK;
+    *out = H5I_INVALID_HID;
     hsize_t chunk[8];
-    hid_t ftype = kind_type(kind, 1), mtype = kind_type(kind, 0);
+    hid_t ftype = kind_type(kind, 1);
     hid_t space = H5Screate_simple(rank, dims, NULL);
     hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE), dset = H5I_INVALID_HID;
-    if (ftype < 0 || mtype < 0 || space < 0 || dcpl < 0) {
+    if (ftype < 0 || space < 0 || dcpl < 0) {
         rc = h5_fail_lib(c, SASNAV_ERR_INTERNAL, "cannot describe dataset %s", name);
         goto done;
     }
@@ -747,17 +748,51 @@ int h5_write_dataset(h5_ctx *c, const char *name, int kind, int rank, const hsiz
         goto done;
     }
     dset = H5Dcreate2(c->file, name, ftype, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
-    if (dset < 0 || H5Dwrite(dset, mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
-        rc = h5_fail_lib(c, SASNAV_ERR_IO, "cannot write dataset %s", name);
+    if (dset < 0) {
+        rc = h5_fail_lib(c, SASNAV_ERR_IO, "cannot create dataset %s", name);
         goto done;
     }
-    close_id(&dset, H5Dclose);
     if (units) rc = h5_write_attr_string(c, name, "units", units);
+    if (!rc) {
+        *out = dset;
+        dset = H5I_INVALID_HID;
+    }
 done:
     close_id(&dset, H5Dclose);
     close_id(&dcpl, H5Pclose);
     close_id(&space, H5Sclose);
-    close_id(&mtype, H5Tclose);
     close_id(&ftype, H5Tclose);
+    return rc;
+}
+
+int h5_write_block(h5_ctx *c, hid_t dset, const char *name, int kind, int rank, const hsize_t *start,
+                   const hsize_t *count, const void *data)
+{
+    int rc = SASNAV_OK;
+    hid_t mtype = kind_type(kind, 0), fspace = H5Dget_space(dset);
+    hid_t mspace = H5Screate_simple(rank, count, NULL);
+    if (mtype < 0 || fspace < 0 || mspace < 0 ||
+        H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, NULL, count, NULL) < 0)
+        rc = h5_fail_lib(c, SASNAV_ERR_INTERNAL, "cannot select a block of %s", name);
+    else if (H5Dwrite(dset, mtype, mspace, fspace, H5P_DEFAULT, data) < 0)
+        rc = h5_fail_lib(c, SASNAV_ERR_IO, "cannot write a block of %s", name);
+    close_id(&mspace, H5Sclose);
+    close_id(&fspace, H5Sclose);
+    close_id(&mtype, H5Tclose);
+    return rc;
+}
+
+int h5_write_dataset(h5_ctx *c, const char *name, int kind, int rank, const hsize_t *dims,
+                     const hsize_t *chunk_hint, const void *data, const char *units)
+{
+    hid_t dset;
+    int rc = h5_create_dataset(c, name, kind, rank, dims, chunk_hint, NULL, &dset);
+    if (rc) return rc;
+    hid_t mtype = kind_type(kind, 0);
+    if (mtype < 0 || H5Dwrite(dset, mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
+        rc = h5_fail_lib(c, SASNAV_ERR_IO, "cannot write dataset %s", name);
+    close_id(&mtype, H5Tclose);
+    close_id(&dset, H5Dclose);
+    if (!rc && units) rc = h5_write_attr_string(c, name, "units", units);
     return rc;
 }

@@ -103,6 +103,13 @@ int h5_write_attr_string(h5_ctx *c, const char *obj, const char *name, const cha
  * attribute (if not NULL). Real data: float64 from double; complex: {r, i}
  * float32. chunk_hint: chunk shape, or NULL for the whole dataset (both
  * capped at 64 MiB per chunk). */
+/* Creates dataset `name` (storage as h5_write_dataset) without data, for
+ * block writes; *dset to be closed by the caller (H5Dclose). */
+int h5_create_dataset(h5_ctx *c, const char *name, int kind, int rank, const hsize_t *dims,
+                      const hsize_t *chunk_hint, const char *units, hid_t *dset);
+/* Writes the block start[k] .. start[k] + count[k] - 1 of an open dataset. */
+int h5_write_block(h5_ctx *c, hid_t dset, const char *name, int kind, int rank, const hsize_t *start,
+                   const hsize_t *count, const void *data);
 int h5_write_dataset(h5_ctx *c, const char *name, int kind, int rank, const hsize_t *dims,
                      const hsize_t *chunk_hint, const void *data, const char *units);
 
