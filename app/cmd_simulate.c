@@ -36,6 +36,16 @@ static const char *help =
     "  --threads N      OpenMP threads (default: all cores)\n"
     "  -o FILE          output run file (HDF5)\n";
 
+static int writer_put(void *ctx, int p, const sasnav_cfloat *samples)
+{
+    return sasnav_run_writer_put(ctx, p, samples);
+}
+
+static int writer_get(void *ctx, int p, sasnav_cfloat *samples)
+{
+    return sasnav_run_writer_get(ctx, p, samples);
+}
+
 int cmd_simulate(int argc, char **argv)
 {
     static const struct option longopts[] = {
@@ -128,14 +138,34 @@ int cmd_simulate(int argc, char **argv)
     sasnav_op_opts oo;
     sasnav_op_default_opts(&oo);
     oo.nthreads = (int)threads;
+    /* Streamed: each ping is written as it is made (memory: the scene and
+     * one ping, whatever the run's length). */
+    sasnav_window win;
+    rc = sasnav_window_for_ranges(&sc.sys, sc.range_min, sc.range_max, 8, &win);
+    sasnav_run shape;
+    memset(&shape, 0, sizeof shape);
+    shape.sys = sc.sys;
+    shape.array = sc.array;
+    shape.win = win;
+    shape.n_pings = sc.traj.n_pings;
+    sasnav_run_writer *w = NULL;
+    if (!rc) rc = sasnav_run_writer_open(output, &shape, &w);
+    if (rc) {
+        sasnav_scene_free(scene);
+        return cli_fail("simulate", rc, "cannot write %s", output);
+    }
+    sasnav_ping_sink sink = {writer_put, writer_get, w};
     sasnav_run *run = NULL;
     cli_progress prog;
     cli_progress_init(&prog, "simulate", "pings");
-    rc = sasnav_simulate_progress(&sc, scene, &oo, &run, cli_ping_progress, &prog);
+    rc = sasnav_simulate_stream(&sc, scene, &oo, &sink, &run, cli_ping_progress, &prog);
     cli_progress_end(&prog);
     sasnav_scene_free(scene);
-    if (rc) return cli_fail("simulate", rc, "simulation failed");
-    rc = sasnav_run_write(output, run);
+    if (rc) {
+        sasnav_run_writer_abort(w);
+        return cli_fail("simulate", rc, "simulation failed");
+    }
+    rc = sasnav_run_writer_finish(w, run);
     int pings = run->n_pings, rx = run->array.n_rx, ns = run->win.n_samples;
     sasnav_run_free(run);
     if (rc) return cli_fail("simulate", rc, "cannot write %s", output);

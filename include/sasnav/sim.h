@@ -139,6 +139,30 @@ int sasnav_simulate_progress(const sasnav_scenario *sc, const sasnav_scene *scen
                              const sasnav_op_opts *opts, sasnav_run **run,
                              sasnav_ping_progress_fn progress, void *user);
 
+/* Where sasnav_simulate_stream puts the pings (e.g. a run file written
+ * ping by ping: sasnav_run_writer, io.h). put() receives ping p's samples
+ * (n_rx * n_samples values); get() reads back what was put. Both return
+ * SASNAV_OK or an error code (message set). */
+typedef struct {
+    int (*put)(void *ctx, int p, const sasnav_cfloat *samples);
+    int (*get)(void *ctx, int p, sasnav_cfloat *samples);
+    void *ctx;
+} sasnav_ping_sink;
+
+/* sasnav_simulate_progress without holding the run: each ping goes to
+ * sink->put as it is made (noise-free); with a finite SNR each is then read
+ * back (get), given its noise and put again (the noise's scale is the
+ * run's mean signal power, known only after the last ping). The samples
+ * are the same bits as sasnav_simulate's. Memory: the scene and one ping.
+ * *header receives the run without samples (raw NULL: navigation, truth,
+ * aiding, constants; for sasnav_run_writer_finish; free with
+ * sasnav_run_free). A scene much longer than a ping's reach (a survey) is
+ * simulated band by band along track (src/sim/simulate.c): the cost grows
+ * linearly with the run's length. */
+int sasnav_simulate_stream(const sasnav_scenario *sc, const sasnav_scene *scene,
+                           const sasnav_op_opts *opts, const sasnav_ping_sink *sink,
+                           sasnav_run **header, sasnav_ping_progress_fn progress, void *user);
+
 #ifdef __cplusplus
 }
 #endif

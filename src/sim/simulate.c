@@ -1,60 +1,225 @@
 /* Raw-data simulator: the ping operator applied to an off-grid scatterer
- * scene with the true sensor poses, plus seeded complex white noise. */
+ * scene with the true sensor poses, plus seeded complex white noise.
+ *
+ * One code path for runs in memory (sasnav_simulate) and runs streamed to
+ * a sink (sasnav_simulate_stream, e.g. a file written ping by ping): the
+ * pings are made one at a time and handed to a sink (for the in-memory run,
+ * a copy into run->raw); the noise, scaled by the run's mean signal power,
+ * is added in a second pass over the pings in order, with one random stream:
+ * the same bits either way.
+ *
+ * Long scenes (a survey): a ping can only reach the scatterers within
+ * c t_last / 2 of its sensors (t_last: the operator's last kept delay), so
+ * when the scene is much longer than that reach, each ping simulates the
+ * scatterers of its own along-track band (scene sorted by x once) instead
+ * of the whole scene: the cost is linear in the run's length. A band holds
+ * every scatterer the ping's operator would keep, but the operator then
+ * sums them in another order than over the whole scene, so the bits differ
+ * in the last place from a whole-scene simulation: the band is used only
+ * when the scene spans more than SELECT_FACTOR times its width, never for
+ * the built-in presets (a few metres). */
 #include "sasnav/error.h"
 #include "sasnav/sim.h"
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
-static int simulate_raw(const sasnav_scenario *sc, const sasnav_scene *scene,
-                        const sasnav_ping_pose *truth, sasnav_run *run,
-                        const sasnav_op_opts *opts, sasnav_ping_progress_fn progress, void *user);
+#define SELECT_FACTOR 4.0
+
+/* Scatterers sorted by x (ties by index: deterministic). */
+typedef struct {
+    double *x, *y;
+    sasnav_cfloat *amp;
+    int n;
+} sorted_scene;
+
+static const sasnav_scene *sort_scene_of;
+static int by_x(const void *a, const void *b)
+{
+    int i = *(const int *)a, j = *(const int *)b;
+    double xi = sort_scene_of->x[i], xj = sort_scene_of->x[j];
+    return xi < xj ? -1 : xi > xj ? 1 : (i > j) - (i < j);
+}
+
+static int sort_scene(const sasnav_scene *scene, sorted_scene *s)
+{
+    memset(s, 0, sizeof *s);
+    int *idx = malloc(sizeof(int) * (size_t)scene->n);
+    s->x = malloc(sizeof(double) * (size_t)scene->n);
+    s->y = malloc(sizeof(double) * (size_t)scene->n);
+    s->amp = malloc(sizeof(sasnav_cfloat) * (size_t)scene->n);
+    if (!idx || !s->x || !s->y || !s->amp) {
+        free(idx);
+        free(s->x);
+        free(s->y);
+        free(s->amp);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory sorting %d scatterers", scene->n);
+    }
+    for (int i = 0; i < scene->n; i++) idx[i] = i;
+    /* qsort is not re-entrant with a context; the simulator holds the
+     * pointer only for this call, inside a critical section. */
+#pragma omp critical(sasnav_sort_scene)
+    {
+        sort_scene_of = scene;
+        qsort(idx, (size_t)scene->n, sizeof(int), by_x);
+        sort_scene_of = NULL;
+    }
+    for (int k = 0; k < scene->n; k++) {
+        s->x[k] = scene->x[idx[k]];
+        s->y[k] = scene->y[idx[k]];
+        s->amp[k] = scene->amp[idx[k]];
+    }
+    s->n = scene->n;
+    free(idx);
+    return SASNAV_OK;
+}
+
+/* First k with s->x[k] >= v. */
+static int lower_bound(const sorted_scene *s, double v)
+{
+    int lo = 0, hi = s->n;
+    while (lo < hi) {
+        int mid = lo + (hi - lo) / 2;
+        if (s->x[mid] < v) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* Radius of the disc around the array's reference point that holds every
+ * sensor of the ping. */
+static double sensor_radius(const sasnav_array *a, const sasnav_ping_pose *pose)
+{
+    double r = hypot(pose->tx.x - pose->array.x, pose->tx.y - pose->array.y);
+    for (int l = 0; l < a->n_rx; l++)
+        if (fabs(a->rx_u[l]) > r) r = fabs(a->rx_u[l]);
+    return r;
+}
+
+typedef int (*put_fn)(void *ctx, int p, const sasnav_cfloat *samples);
+typedef int (*get_fn)(void *ctx, int p, sasnav_cfloat *samples);
+
+/* The pings of `run` (shape, truth) simulated into the sink; *power_out:
+ * mean signal power over all samples. */
+static int simulate_pings(const sasnav_scene *scene, const sasnav_ping_pose *truth, const sasnav_run *run,
+                          const sasnav_op_opts *opts, put_fn put, void *ctx, double *power_out,
+                          sasnav_ping_progress_fn progress, void *user)
+{
+    size_t per_ping = (size_t)run->array.n_rx * (size_t)run->win.n_samples;
+    sasnav_cfloat *buf = malloc(sizeof *buf * per_ping);
+    if (!buf) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for a ping");
+    sasnav_op *op = NULL;
+    int rc = sasnav_op_create(&run->sys, &run->array, &run->win, scene->n, scene->x, scene->y, opts, &op);
+    if (rc) {
+        free(buf);
+        return rc;
+    }
+    double t_first, t_last;
+    sasnav_op_delay_span(op, &t_first, &t_last);
+    double reach = 0.5 * run->sys.sound_speed * t_last;
+    double xmin = INFINITY, xmax = -INFINITY;
+    for (int i = 0; i < scene->n; i++) {
+        if (scene->x[i] < xmin) xmin = scene->x[i];
+        if (scene->x[i] > xmax) xmax = scene->x[i];
+    }
+    sorted_scene sorted = {0};
+    int select = xmax - xmin > SELECT_FACTOR * 2.0 * (reach + sensor_radius(&run->array, &truth[0]));
+    if (select) {
+        sasnav_op_destroy(op);
+        op = NULL;
+        rc = sort_scene(scene, &sorted);
+    }
+    double power = 0;
+    for (int p = 0; p < run->n_pings && !rc; p++) {
+        if (select) {
+            double band = reach + sensor_radius(&run->array, &truth[p]) + 1e-6;
+            int k0 = lower_bound(&sorted, truth[p].array.x - band);
+            int k1 = lower_bound(&sorted, truth[p].array.x + band);
+            if (k1 > k0) {
+                rc = sasnav_op_create(&run->sys, &run->array, &run->win, k1 - k0, sorted.x + k0, sorted.y + k0,
+                                      opts, &op);
+                if (!rc) rc = sasnav_op_set_geometry(op, &truth[p]);
+                if (!rc) rc = sasnav_op_forward(op, sorted.amp + k0, buf);
+                sasnav_op_destroy(op);
+                op = NULL;
+            } else {
+                memset(buf, 0, sizeof *buf * per_ping);
+            }
+        } else {
+            rc = sasnav_op_set_geometry(op, &truth[p]);
+            if (!rc) rc = sasnav_op_forward(op, scene->amp, buf);
+        }
+        for (size_t i = 0; !rc && i < per_ping; i++) {
+            float re = crealf(buf[i]), im = cimagf(buf[i]);
+            power += (double)re * re + (double)im * im;
+        }
+        if (!rc) rc = put(ctx, p, buf);
+        if (!rc && progress) progress(p + 1, run->n_pings, user);
+    }
+    sasnav_op_destroy(op);
+    free(sorted.x);
+    free(sorted.y);
+    free(sorted.amp);
+    free(buf);
+    *power_out = power / ((double)per_ping * (double)run->n_pings);
+    return rc;
+}
+
+/* Second pass: complex white noise at sc->snr_db of the mean power, one
+ * random stream over the pings in order. */
+static int add_noise(const sasnav_scenario *sc, const sasnav_run *run, double power, put_fn put,
+                     get_fn get, void *ctx)
+{
+    if (isinf(sc->snr_db) && sc->snr_db > 0) return SASNAV_OK;
+    if (!(power > 0))
+        return sasnav_set_error(SASNAV_ERR_GEOMETRY,
+                                "simulated echoes are all zero: the scene is outside the window or beam");
+    double sigma = sqrt(power / pow(10.0, sc->snr_db / 10.0) / 2.0);
+    size_t per_ping = (size_t)run->array.n_rx * (size_t)run->win.n_samples;
+    sasnav_cfloat *buf = malloc(sizeof *buf * per_ping);
+    if (!buf) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for a ping");
+    sasnav_rng rng;
+    sasnav_rng_seed(&rng, sc->noise_seed);
+    int rc = SASNAV_OK;
+    for (int p = 0; p < run->n_pings && !rc; p++) {
+        rc = get(ctx, p, buf);
+        for (size_t i = 0; !rc && i < per_ping; i++) {
+            double nr = sasnav_rng_normal(&rng), ni = sasnav_rng_normal(&rng);
+            buf[i] += (float)(sigma * nr) + I * (float)(sigma * ni);
+        }
+        if (!rc) rc = put(ctx, p, buf);
+    }
+    free(buf);
+    return rc;
+}
+
+/* The in-memory sink: run->raw. */
+static int mem_put(void *ctx, int p, const sasnav_cfloat *samples)
+{
+    sasnav_run *run = ctx;
+    memcpy(sasnav_run_ping(run, p), samples, sizeof *samples * sasnav_run_ping_size(run));
+    return SASNAV_OK;
+}
+
+static int mem_get(void *ctx, int p, sasnav_cfloat *samples)
+{
+    sasnav_run *run = ctx;
+    memcpy(samples, sasnav_run_ping(run, p), sizeof *samples * sasnav_run_ping_size(run));
+    return SASNAV_OK;
+}
 
 int sasnav_simulate_raw(const sasnav_scenario *sc, const sasnav_scene *scene,
                         const sasnav_ping_pose *truth, sasnav_run *run,
                         const sasnav_op_opts *opts)
 {
-    return simulate_raw(sc, scene, truth, run, opts, NULL, NULL);
-}
-
-static int simulate_raw(const sasnav_scenario *sc, const sasnav_scene *scene,
-                        const sasnav_ping_pose *truth, sasnav_run *run,
-                        const sasnav_op_opts *opts, sasnav_ping_progress_fn progress, void *user)
-{
     if (!sc || !scene || !truth || !run || !run->raw)
         return sasnav_set_error(SASNAV_ERR_ARG, "NULL simulation argument");
     if (scene->n < 1) return sasnav_set_error(SASNAV_ERR_ARG, "empty scene");
-    sasnav_op *op = NULL;
-    int rc = sasnav_op_create(&run->sys, &run->array, &run->win, scene->n, scene->x, scene->y,
-                              opts, &op);
-    if (rc) return rc;
-    for (int p = 0; p < run->n_pings && !rc; p++) {
-        rc = sasnav_op_set_geometry(op, &truth[p]);
-        if (!rc) rc = sasnav_op_forward(op, scene->amp, sasnav_run_ping(run, p));
-        if (!rc && progress) progress(p + 1, run->n_pings, user);
-    }
-    sasnav_op_destroy(op);
-    if (rc) return rc;
-    if (isinf(sc->snr_db) && sc->snr_db > 0) return SASNAV_OK;
-
-    size_t total = (size_t)run->n_pings * run->array.n_rx * run->win.n_samples;
     double power = 0;
-    for (size_t i = 0; i < total; i++) {
-        float re = crealf(run->raw[i]), im = cimagf(run->raw[i]);
-        power += (double)re * re + (double)im * im;
-    }
-    power /= (double)total;
-    if (!(power > 0))
-        return sasnav_set_error(SASNAV_ERR_GEOMETRY,
-                                "simulated echoes are all zero: the scene is outside the window or beam");
-    double sigma = sqrt(power / pow(10.0, sc->snr_db / 10.0) / 2.0);
-    sasnav_rng rng;
-    sasnav_rng_seed(&rng, sc->noise_seed);
-    for (size_t i = 0; i < total; i++) {
-        double nr = sasnav_rng_normal(&rng), ni = sasnav_rng_normal(&rng);
-        run->raw[i] += (float)(sigma * nr) + I * (float)(sigma * ni);
-    }
-    return SASNAV_OK;
+    int rc = simulate_pings(scene, truth, run, opts, mem_put, run, &power, NULL, NULL);
+    if (!rc) rc = add_noise(sc, run, power, mem_put, mem_get, run);
+    return rc;
 }
 
 static int scenario_scene(const sasnav_scenario *sc, sasnav_scene **scene)
@@ -74,11 +239,10 @@ int sasnav_simulate(const sasnav_scenario *sc, const sasnav_scene *scene,
     return sasnav_simulate_progress(sc, scene, opts, out, NULL, NULL);
 }
 
-int sasnav_simulate_progress(const sasnav_scenario *sc, const sasnav_scene *scene,
-                             const sasnav_op_opts *opts, sasnav_run **out,
-                             sasnav_ping_progress_fn progress, void *user)
+/* The run's header (navigation, truth, constants; samples only when
+ * with_raw) for scenario sc. */
+static int scenario_header(const sasnav_scenario *sc, int with_raw, sasnav_run **out)
 {
-    if (!sc || !out) return sasnav_set_error(SASNAV_ERR_ARG, "NULL simulation argument");
     *out = NULL;
     int rc = sasnav_scenario_check(sc);
     if (rc) return rc;
@@ -86,7 +250,24 @@ int sasnav_simulate_progress(const sasnav_scenario *sc, const sasnav_scene *scen
     rc = sasnav_window_for_ranges(&sc->sys, sc->range_min, sc->range_max, 8, &win);
     if (rc) return rc;
     sasnav_run *run = NULL;
-    rc = sasnav_run_alloc(&sc->sys, &sc->array, &win, sc->traj.n_pings, 1, &run);
+    if (with_raw) {
+        rc = sasnav_run_alloc(&sc->sys, &sc->array, &win, sc->traj.n_pings, 1, &run);
+    } else {
+        /* A header: a streamed run whose source is never read. */
+        run = calloc(1, sizeof *run);
+        if (!run) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        run->sys = sc->sys;
+        run->array = sc->array;
+        run->win = win;
+        run->n_pings = sc->traj.n_pings;
+        run->nav = calloc((size_t)run->n_pings, sizeof *run->nav);
+        run->truth = calloc((size_t)run->n_pings, sizeof *run->truth);
+        if (!run->nav || !run->truth) {
+            sasnav_run_free(run);
+            return sasnav_set_error(SASNAV_ERR_NOMEM, "cannot allocate the navigation of %d pings",
+                                    run->n_pings);
+        }
+    }
     if (rc) return rc;
     run->ping_spacing = sc->traj.ping_spacing;
     run->speed = sc->traj.speed;
@@ -94,12 +275,32 @@ int sasnav_simulate_progress(const sasnav_scenario *sc, const sasnav_scene *scen
     run->range_of_interest = sc->range_of_interest;
     rc = sasnav_trajectory_nominal(&sc->traj, run->nav);
     if (!rc) rc = sasnav_trajectory_true(&sc->traj, run->truth);
+    if (rc) {
+        sasnav_run_free(run);
+        return rc;
+    }
+    *out = run;
+    return SASNAV_OK;
+}
+
+int sasnav_simulate_progress(const sasnav_scenario *sc, const sasnav_scene *scene,
+                             const sasnav_op_opts *opts, sasnav_run **out,
+                             sasnav_ping_progress_fn progress, void *user)
+{
+    if (!sc || !out) return sasnav_set_error(SASNAV_ERR_ARG, "NULL simulation argument");
+    *out = NULL;
+    sasnav_run *run = NULL;
+    int rc = scenario_header(sc, 1, &run);
+    if (rc) return rc;
     sasnav_scene *own = NULL;
-    if (!rc && !scene) {
+    if (!scene) {
         rc = scenario_scene(sc, &own);
         scene = own;
     }
-    if (!rc) rc = simulate_raw(sc, scene, run->truth, run, opts, progress, user);
+    double power = 0;
+    if (!rc && scene->n < 1) rc = sasnav_set_error(SASNAV_ERR_ARG, "empty scene");
+    if (!rc) rc = simulate_pings(scene, run->truth, run, opts, mem_put, run, &power, progress, user);
+    if (!rc) rc = add_noise(sc, run, power, mem_put, mem_get, run);
     if (!rc && sc->aiding.enabled) rc = sasnav_simulate_aiding(&sc->aiding, sc->traj.speed, run);
     sasnav_scene_free(own);
     if (rc) {
@@ -107,5 +308,34 @@ int sasnav_simulate_progress(const sasnav_scenario *sc, const sasnav_scene *scen
         return rc;
     }
     *out = run;
+    return SASNAV_OK;
+}
+
+int sasnav_simulate_stream(const sasnav_scenario *sc, const sasnav_scene *scene,
+                           const sasnav_op_opts *opts, const sasnav_ping_sink *sink,
+                           sasnav_run **header, sasnav_ping_progress_fn progress, void *user)
+{
+    if (!sc || !sink || !sink->put || !sink->get || !header)
+        return sasnav_set_error(SASNAV_ERR_ARG, "NULL simulation argument");
+    *header = NULL;
+    sasnav_run *run = NULL;
+    int rc = scenario_header(sc, 0, &run);
+    if (rc) return rc;
+    sasnav_scene *own = NULL;
+    if (!scene) {
+        rc = scenario_scene(sc, &own);
+        scene = own;
+    }
+    double power = 0;
+    if (!rc && scene->n < 1) rc = sasnav_set_error(SASNAV_ERR_ARG, "empty scene");
+    if (!rc) rc = simulate_pings(scene, run->truth, run, opts, sink->put, sink->ctx, &power, progress, user);
+    if (!rc) rc = add_noise(sc, run, power, sink->put, sink->get, sink->ctx);
+    if (!rc && sc->aiding.enabled) rc = sasnav_simulate_aiding(&sc->aiding, sc->traj.speed, run);
+    sasnav_scene_free(own);
+    if (rc) {
+        sasnav_run_free(run);
+        return rc;
+    }
+    *header = run;
     return SASNAV_OK;
 }
