@@ -4,6 +4,7 @@
 #include "sasnav/plot.h"
 
 #include <getopt.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -85,6 +86,21 @@ static int image_one_ping(const sasnav_run *run, const sasnav_ping_pose *pose, i
     return rc;
 }
 
+/* Progress in (tile, ping) steps over the whole image: `base` steps of
+ * earlier tiles, plus the tile being made. */
+typedef struct {
+    cli_progress *prog;
+    long base, total;
+} tile_progress;
+
+static void tile_ping_progress(int done, int total, void *user)
+{
+    (void)total;
+    tile_progress *tp = user;
+    long d = tp->base + done;
+    cli_progress_update(tp->prog, (int)(d < INT_MAX ? d : INT_MAX), (int)(tp->total < INT_MAX ? tp->total : INT_MAX));
+}
+
 /* Images larger than this are written but not drawn (--png). */
 #define PNG_MAX_PIXELS 67108864.0
 
@@ -119,15 +135,15 @@ static int image_tiles(const char *output, const sasnav_run *run, const sasnav_p
         return rc && (rank == 0 || !rank0_failed) ? cli_fail("image", rc, "cannot write %s", output) : CLI_FAILURE;
     }
     cli_progress prog;
-    cli_progress_init(&prog, "image", "tiles");
-    cli_progress_update(&prog, 0, (int)ntiles);
+    cli_progress_init(&prog, "image", "pings");
+    tile_progress tp = {&prog, 0, ntiles * run->n_pings};
     for (long t = 0; t < ntiles; t++) {
         int owner = (int)(t % ranks);
         int c0 = (int)(t % ntx) * tw, r0 = (int)(t / ntx) * th;
         int c1 = c0 + tw < g->nx ? c0 + tw : g->nx, r1 = r0 + th < g->ny ? r0 + th : g->ny;
         size_t bytes = sizeof *buf * (size_t)(c1 - c0) * (size_t)(r1 - r0);
         if (owner == rank) {
-            rc = sasnav_backproject_tile(run, nav, g, c0, c1, r0, r1, oo, buf, NULL, NULL);
+            rc = sasnav_backproject_tile(run, nav, g, c0, c1, r0, r1, oo, buf, tile_ping_progress, &tp);
             if (rc) cli_fail("image", rc, "backprojection failed");
             if (rank != 0) {
                 int st = rc;
@@ -154,7 +170,8 @@ static int image_tiles(const char *output, const sasnav_run *run, const sasnav_p
             if (rc) cli_fail("image", rc, "cannot write %s", output);
         }
         if (rc) break;
-        cli_progress_update(&prog, (int)(t + 1), (int)ntiles);
+        tp.base += run->n_pings;
+        tile_ping_progress(0, 0, &tp);
     }
     cli_progress_end(&prog);
     free(buf);

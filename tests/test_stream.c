@@ -223,10 +223,19 @@ static void test_parts(const char *path, int method)
     sasnav_run_free(st);
 }
 
-/* A ping made non-finite in the file: opening succeeds (the samples are
- * not read), reading that ping fails naming it, the other pings read, and
- * a navigation stops with the message, without a crash. */
-static void test_corrupt_ping(const char *path)
+/* A ping made non-finite in the file: opening refuses it up front (every
+ * ping is checked once as it is opened), with the message of a whole read.
+ * A source that fails when a ping is read later (a disk error) makes a
+ * navigation and a backprojection stop with its message, no crash. */
+static int failing_read(void *ctx, int p, sasnav_cfloat *out)
+{
+    const sasnav_run *mem = ctx;
+    if (p == 2) return sasnav_set_error(SASNAV_ERR_IO, "disk error reading ping 2");
+    memcpy(out, sasnav_run_ping(mem, p), sizeof *out * sasnav_run_ping_size(mem));
+    return SASNAV_OK;
+}
+
+static void test_corrupt_ping(const char *path, const sasnav_run *mem)
 {
     hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
     hid_t d = H5Dopen2(f, "/raw", H5P_DEFAULT);
@@ -246,25 +255,38 @@ static void test_corrupt_ping(const char *path)
     H5Fclose(f);
 
     sasnav_run *st = NULL;
-    CHECK_OK(sasnav_run_open(path, &st));
-    if (!st) return;
-    sasnav_cfloat *buf = malloc(sizeof *buf * sasnav_run_ping_size(st));
-    const sasnav_cfloat *got = NULL;
-    CHECK_OK(sasnav_run_get_ping(st, 1, buf, &got));
-    int rc = sasnav_run_get_ping(st, 2, buf, &got);
-    CHECK(rc == SASNAV_ERR_FORMAT && strstr(sasnav_last_error(), "ping 2") &&
+    int rc = sasnav_run_open(path, &st);
+    CHECK(rc == SASNAV_ERR_FORMAT && !st && strstr(sasnav_last_error(), "ping 2") &&
               strstr(sasnav_last_error(), "channel 3") && strstr(sasnav_last_error(), path),
-          "corrupt ping: %d %s", rc, sasnav_last_error());
+          "corrupt ping at open: %d %s", rc, sasnav_last_error());
+    char open_msg[512];
+    snprintf(open_msg, sizeof open_msg, "%s", sasnav_last_error());
+    sasnav_run *whole = NULL;
+    CHECK(sasnav_run_read(path, &whole) == SASNAV_ERR_FORMAT && !whole, "the whole read refuses it too");
+    CHECK(!strcmp(open_msg, sasnav_last_error()), "different messages: '%s' and '%s'", open_msg,
+          sasnav_last_error());
+
+    sasnav_ping_source src = {failing_read, NULL, (void *)mem};
+    CHECK_OK(sasnav_run_alloc_streamed(&mem->sys, &mem->array, &mem->win, mem->n_pings, 0, &src, &st));
+    if (!st) return;
+    memcpy(st->nav, mem->nav, sizeof *st->nav * (size_t)mem->n_pings);
+    st->ping_spacing = mem->ping_spacing;
+    st->tx_lag = mem->tx_lag;
+    st->range_of_interest = mem->range_of_interest;
+    st->speed = mem->speed;
     sasnav_navigate_opts o;
     sasnav_navigate_default_opts(&o);
     o.method = SASNAV_METHOD_DPCA;
     sasnav_navigation nav;
     rc = sasnav_navigate(st, &o, &nav);
-    CHECK(rc == SASNAV_ERR_FORMAT && strstr(sasnav_last_error(), "ping 2"), "navigate over a corrupt ping: %d %s",
-          rc, sasnav_last_error());
-    sasnav_run *whole = NULL;
-    CHECK(sasnav_run_read(path, &whole) == SASNAV_ERR_FORMAT && !whole, "the whole read refuses it too");
-    free(buf);
+    CHECK(rc == SASNAV_ERR_IO && strstr(sasnav_last_error(), "disk error reading ping 2"),
+          "navigate over a failing source: %d %s", rc, sasnav_last_error());
+    sasnav_grid g;
+    CHECK_OK(sasnav_grid_make(-0.5, 0.5, 11, 9.5, 10.5, 11, &g));
+    sasnav_cfloat img[121];
+    rc = sasnav_backproject(st, st->nav, &g, NULL, img);
+    CHECK(rc == SASNAV_ERR_IO && strstr(sasnav_last_error(), "ping 2"), "backproject over a failing source: %d %s", rc,
+          sasnav_last_error());
     sasnav_run_free(st);
 }
 
@@ -390,7 +412,7 @@ int main(void)
 #ifndef SASNAV_TEST_SANITIZED
     test_parts(path, SASNAV_METHOD_SUBSPACE);
 #endif
-    test_corrupt_ping(path);
+    test_corrupt_ping(path, mem);
     sasnav_run *absent = NULL;
     snprintf(path, sizeof path, "%s/absent.h5", test_tmpdir());
     CHECK(sasnav_run_open(path, &absent) != SASNAV_OK && !absent, "a missing file is refused");

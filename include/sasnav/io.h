@@ -32,12 +32,13 @@ extern "C" {
 int sasnav_run_write(const char *path, const sasnav_run *run);
 int sasnav_run_read(const char *path, sasnav_run **run);
 
-/* Opens a run file for streaming: everything but the samples is read and
- * checked as by sasnav_run_read; the pings are read one at a time when
- * used (sasnav_run_get_ping: one HDF5 chunk each), and each is checked
- * then (a non-finite sample is an error naming the ping). Memory: the
- * run's navigation, truth and aiding (tens of bytes per ping), not its
- * samples. The file stays open until sasnav_run_free. */
+/* Opens a run file for streaming: everything is read and checked as by
+ * sasnav_run_read, the samples one ping at a time (a corrupt or
+ * non-finite sample is refused here, up front, with the same message), but
+ * not kept: the pings are read again when used (sasnav_run_get_ping: one
+ * HDF5 chunk each, checked again). Memory: the run's navigation, truth and
+ * aiding (tens of bytes per ping) and one ping, not its samples. The file
+ * stays open until sasnav_run_free. */
 int sasnav_run_open(const char *path, sasnav_run **run);
 
 /* Navigation only (e.g. the output of `sasnav navigate`): /nav/tx,

@@ -550,6 +550,21 @@ static int run_read_open(h5_ctx *c, int streamed, sasnav_run **out)
             rc = sasnav_run_alloc_streamed(&h.sys, &h.array, &h.win, h.n_pings, with_truth, &src, &run);
             if (rc) rc = h5_reframe(c, rc, "/raw");
             else c->file = st->file; /* borrowed for the reads below */
+            /* Every ping read once and checked now, one at a time: a
+             * corrupt or non-finite sample is refused up front, as by
+             * sasnav_run_read, not hours into a survey's processing. */
+            sasnav_cfloat *buf = rc ? NULL : malloc(sizeof *buf * st->per_ping);
+            if (!rc && !buf) rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for a ping");
+            for (int p = 0; !rc && p < h.n_pings; p++) {
+                rc = h5_read_rows(c, st->raw, "/raw", H5_COMPLEX, (hsize_t)p, 1, buf);
+                size_t bad;
+                if (!rc && !floats_finite((const float *)buf, 2 * st->per_ping, &bad)) {
+                    bad /= 2;
+                    rc = h5_fail(c, SASNAV_ERR_FORMAT, "/raw: sample %zu of channel %zu of ping %d is not finite",
+                                 bad % st->per_channel, bad / st->per_channel, p);
+                }
+            }
+            free(buf);
         }
     } else if (!rc) {
         rc = sasnav_run_alloc(&h.sys, &h.array, &h.win, h.n_pings, with_truth, &run);
