@@ -283,6 +283,27 @@ static int scenario_header(const sasnav_scenario *sc, int with_raw, sasnav_run *
     return SASNAV_OK;
 }
 
+/* Scene (the scenario's unless given), pings, noise and aiding of `run`
+ * (its header made by scenario_header) into the sink. */
+static int simulate_into(const sasnav_scenario *sc, const sasnav_scene *scene, const sasnav_op_opts *opts,
+                         sasnav_run *run, put_fn put, get_fn get, void *ctx,
+                         sasnav_ping_progress_fn progress, void *user)
+{
+    sasnav_scene *own = NULL;
+    int rc = SASNAV_OK;
+    if (!scene) {
+        rc = scenario_scene(sc, &own);
+        scene = own;
+    }
+    double power = 0;
+    if (!rc && scene->n < 1) rc = sasnav_set_error(SASNAV_ERR_ARG, "empty scene");
+    if (!rc) rc = simulate_pings(scene, run->truth, run, opts, put, ctx, &power, progress, user);
+    if (!rc) rc = add_noise(sc, run, power, put, get, ctx);
+    if (!rc && sc->aiding.enabled) rc = sasnav_simulate_aiding(&sc->aiding, sc->traj.speed, run);
+    sasnav_scene_free(own);
+    return rc;
+}
+
 int sasnav_simulate_progress(const sasnav_scenario *sc, const sasnav_scene *scene,
                              const sasnav_op_opts *opts, sasnav_run **out,
                              sasnav_ping_progress_fn progress, void *user)
@@ -291,18 +312,7 @@ int sasnav_simulate_progress(const sasnav_scenario *sc, const sasnav_scene *scen
     *out = NULL;
     sasnav_run *run = NULL;
     int rc = scenario_header(sc, 1, &run);
-    if (rc) return rc;
-    sasnav_scene *own = NULL;
-    if (!scene) {
-        rc = scenario_scene(sc, &own);
-        scene = own;
-    }
-    double power = 0;
-    if (!rc && scene->n < 1) rc = sasnav_set_error(SASNAV_ERR_ARG, "empty scene");
-    if (!rc) rc = simulate_pings(scene, run->truth, run, opts, mem_put, run, &power, progress, user);
-    if (!rc) rc = add_noise(sc, run, power, mem_put, mem_get, run);
-    if (!rc && sc->aiding.enabled) rc = sasnav_simulate_aiding(&sc->aiding, sc->traj.speed, run);
-    sasnav_scene_free(own);
+    if (!rc) rc = simulate_into(sc, scene, opts, run, mem_put, mem_get, run, progress, user);
     if (rc) {
         sasnav_run_free(run);
         return rc;
@@ -320,18 +330,7 @@ int sasnav_simulate_stream(const sasnav_scenario *sc, const sasnav_scene *scene,
     *header = NULL;
     sasnav_run *run = NULL;
     int rc = scenario_header(sc, 0, &run);
-    if (rc) return rc;
-    sasnav_scene *own = NULL;
-    if (!scene) {
-        rc = scenario_scene(sc, &own);
-        scene = own;
-    }
-    double power = 0;
-    if (!rc && scene->n < 1) rc = sasnav_set_error(SASNAV_ERR_ARG, "empty scene");
-    if (!rc) rc = simulate_pings(scene, run->truth, run, opts, sink->put, sink->ctx, &power, progress, user);
-    if (!rc) rc = add_noise(sc, run, power, sink->put, sink->get, sink->ctx);
-    if (!rc && sc->aiding.enabled) rc = sasnav_simulate_aiding(&sc->aiding, sc->traj.speed, run);
-    sasnav_scene_free(own);
+    if (!rc) rc = simulate_into(sc, scene, opts, run, sink->put, sink->get, sink->ctx, progress, user);
     if (rc) {
         sasnav_run_free(run);
         return rc;
