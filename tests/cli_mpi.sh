@@ -67,12 +67,19 @@ same_nav() { # label, extra options...
     [ "$(grep -c -- '->' "$T/two.err")" -eq 1 ] || fail "$label: the closing line printed other than once"
 }
 same_nav dpca --method dpca
-same_nav subspace --k 2 --i 1
+# The sanitized build (~20x slower) checks the MPI paths' memory safety with
+# DPCA and two ranks; the subspace estimator's bits are the optimised build's.
+if [ -z "${SASNAV_SANITIZED:-}" ]; then
+    same_nav subspace --k 2 --i 1
+    RANKS="2 3"
+else
+    RANKS="2"
+fi
 
 # Image: rows split over 2 and 3 ranks.
 "$CLI" image "$T/run.h5" --grid -0.6,0.6,61,9.5,10.5,51 -o "$T/img1.h5" 2> "$T/img.err" ||
     { cat "$T/img.err" >&2; fail "image, one process"; }
-for n in 2 3; do
+for n in $RANKS; do
     $MPIRUN -np $n "$CLI" image "$T/run.h5" --grid -0.6,0.6,61,9.5,10.5,51 -o "$T/img$n.h5" 2> "$T/img.err" ||
         { cat "$T/img.err" >&2; fail "image, $n ranks"; continue; }
     h5diff "$T/img1.h5" "$T/img$n.h5" > "$T/diff.txt" 2>&1 || { cat "$T/diff.txt" >&2; fail "image, $n ranks: differs"; }
