@@ -501,8 +501,11 @@ PROTOTYPES = {
     "sasnav_run_ping": (cfloat_p, [_P(RunC), _i]),
     "sasnav_run_subset": (_i, [_P(RunC), _P(_i), _i, _P(_i), _i, _P(_P(RunC))]),
     "sasnav_run_free": (_v, [_P(RunC)]),
+    "sasnav_run_get_ping": (_i, [_P(RunC), _i, cfloat_p, _P(cfloat_p)]),
+    "sasnav_run_ping_size": (ctypes.c_size_t, [_P(RunC)]),
     # io.h, config.h
     "sasnav_run_read": (_i, [c_char_p, _P(_P(RunC))]),
+    "sasnav_run_open": (_i, [c_char_p, _P(_P(RunC))]),
     "sasnav_run_write": (_i, [c_char_p, _P(RunC)]),
     "sasnav_nav_read": (_i, [c_char_p, _P(_i), _P(_P(PingPose)), _P(_P(PingPose))]),
     "sasnav_nav_write": (_i, [c_char_p, _i, _P(PingPose), _P(PingPose)]),
@@ -546,6 +549,7 @@ PROTOTYPES = {
     "sasnav_navigate_default_opts": (_v, [_P(NavigateOpts)]),
     "sasnav_resolution_name": (c_char_p, [_i]),
     "sasnav_navigate": (_i, [_P(RunC), _P(NavigateOpts), _P(NavigationC)]),
+    "sasnav_navigate_part": (_i, [_P(RunC), _P(NavigateOpts), _i, _i, _P(_P(PairRecord)), _P(_i)]),
     "sasnav_navigation_free": (_v, [_P(NavigationC)]),
 }
 

@@ -385,6 +385,85 @@ def read_run(path):
     return _take_run(ptr)
 
 
+class StreamedRun:
+    """A run file opened for streaming (sasnav_run_open): everything but
+    the samples is held (n_pings, system, array, t0, nav, truth, ...), and
+    each ping is read from the file when asked for (`ping(p)`, a complex64
+    array [rx][sample]) or when `navigate` / `image` use it: a survey's run
+    need not fit in memory. The file was checked ping by ping when opened.
+    Close it with close() or use it in a `with` block."""
+
+    def __init__(self, ptr):
+        self._ptr = ptr
+        r = ptr.contents
+        self.system = System._from_c(r.sys)
+        self.array = SensorArray._from_c(r.array)
+        self.t0 = r.win.t0
+        self.n_pings, self.n_rx, self.n_samples = r.n_pings, r.array.n_rx, r.win.n_samples
+        self.nav = _copy_out(_addr(r.nav), PING_POSE_DTYPE, r.n_pings)
+        self.truth = _copy_out(_addr(r.truth), PING_POSE_DTYPE, r.n_pings) if r.truth else None
+        self.ping_spacing, self.speed = r.ping_spacing, r.speed
+        self.tx_lag, self.range_of_interest = r.tx_lag, r.range_of_interest
+        self.has_aiding = bool(r.aiding)
+
+    def _c(self):
+        if self._ptr is None:
+            raise ValueError("the streamed run is closed")
+        return self._ptr
+
+    def ping(self, p):
+        """Ping p's samples, read from the file (complex64 [rx][sample])."""
+        if int(p) != p or not 0 <= p < self.n_pings:
+            raise ValueError(f"ping {p!r} out of range (the run has {self.n_pings} pings)")
+        out = np.zeros((self.n_rx, self.n_samples), np.complex64)
+        got = C.cfloat_p()
+        with io_lock:
+            check(lib().sasnav_run_get_ping(self._c(), int(p), out.ctypes.data, ctypes.byref(got)))
+        return out
+
+    @property
+    def centroids(self):
+        return centroids(self.nav)
+
+    def close(self):
+        if self._ptr is not None:
+            with io_lock:
+                lib().sasnav_run_free(self._ptr)
+            self._ptr = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
+
+
+def open_run(path):
+    """Opens a run file for streaming (a StreamedRun; sasnav_run_open)."""
+    ptr = ctypes.POINTER(C.RunC)()
+    with io_lock:
+        check(lib().sasnav_run_open(path_arg(path), ctypes.byref(ptr)))
+    return StreamedRun(ptr)
+
+
+@contextlib.contextmanager
+def _run_arg(run):
+    """The C run of a Run (a copy, freed on exit) or of a StreamedRun (its
+    own, holding the HDF5 lock: the library reads the file)."""
+    if isinstance(run, StreamedRun):
+        with io_lock:
+            yield run._c()
+    else:
+        with _c_run(run) as r:
+            yield r
+
+
 def write_run(run, path):
     """Writes a Run as a run file (validated by the library first)."""
     with _c_run(run) as r, io_lock:
@@ -1019,23 +1098,8 @@ def _navigation_from_c(nv, truth):
         nv.seconds, nv.seconds_per_pair, nv.pairs_per_second, nv.threads_over_pairs)
 
 
-def navigate(run, *, pair=None, dpca=None, progress=None, **opts):
-    """Navigates a run from its ping-pair estimates (as `sasnav navigate`).
-
-    opts: any field of sasnav_navigate_opts (navigate.h) by name: method
-    ("subspace", "dpca", "aiding"), long_baselines, align, resolve,
-    use_aiding, motion_sigma=(s, w, y), link_sigma, long_sigma, eta_weight,
-    aiding_gate, speed_lags ("none", "dvl", "pairs"), aiding_bias_sigma,
-    threads (= nthreads); any other keyword that names a field of
-    sasnav_pair_opts (k, i, yaw_sigma, fix_yaw, ...) goes to the subspace
-    estimator, as do the entries of the dict `pair`; `dpca` is a dict of
-    sasnav_dpca_opts fields. progress(done, total, p, q, seconds) is called
-    before the first pair and after each (from the estimating thread).
-    Returns a Navigation."""
-    if not isinstance(run, Run):
-        raise TypeError(f"expected a sasnav.Run, got {type(run).__name__}")
-    if run.n_pings < 2:
-        raise ValueError("navigate needs a run of at least two pings")
+def _navigate_opts(pair, dpca, opts):
+    """sasnav_navigate_opts from the keyword options of navigate()."""
     L = lib()
     no = C.NavigateOpts()
     L.sasnav_navigate_default_opts(ctypes.byref(no))
@@ -1056,6 +1120,91 @@ def navigate(run, *, pair=None, dpca=None, progress=None, **opts):
         no.pair.coarse_k = min(no.pair.coarse_k, no.pair.k)
     if "coarse_i" not in pair_opts:
         no.pair.coarse_i = min(no.pair.coarse_i, no.pair.i)
+    return no
+
+
+def _check_navigable(run):
+    if not isinstance(run, (Run, StreamedRun)):
+        raise TypeError(f"expected a sasnav.Run or StreamedRun, got {type(run).__name__}")
+    if run.n_pings < 2:
+        raise ValueError("navigate needs a run of at least two pings")
+
+
+class PairRecords:
+    """First pair estimates of (part of) a navigation, by content key
+    (sasnav_pair_record): what navigate_part returns, and what navigate
+    takes as `done` (already estimated). Join the parts with
+    PairRecords.join([...])."""
+
+    def __init__(self, array):
+        self._array = array  # ctypes array of C.PairRecord
+
+    def __len__(self):
+        return len(self._array)
+
+    @staticmethod
+    def join(parts):
+        parts = list(parts)
+        n = sum(len(p) for p in parts)
+        arr = (C.PairRecord * n)()
+        k = 0
+        for part in parts:
+            for rec in part._array:
+                arr[k] = rec
+                k += 1
+        return PairRecords(arr)
+
+    @property
+    def pairs(self):
+        """(p, q) of each record, in order."""
+        return [(r.p, r.q) for r in self._array]
+
+
+def navigate_part(run, part, n_parts, *, pair=None, dpca=None, **opts):
+    """The first estimates of one part of a navigation spread over
+    processes (sasnav_navigate_part: pairs j with j % n_parts == part);
+    navigate(run, done=PairRecords.join(parts)) then gives the same
+    navigation as one call, bit for bit. Same options as navigate."""
+    _check_navigable(run)
+    no = _navigate_opts(pair, dpca, opts)
+    recs = ctypes.POINTER(C.PairRecord)()
+    n = ctypes.c_int(0)
+    with _run_arg(run) as r:
+        check(lib().sasnav_navigate_part(r, ctypes.byref(no), int(part), int(n_parts), ctypes.byref(recs),
+                                         ctypes.byref(n)))
+    try:
+        arr = (C.PairRecord * n.value)()
+        if n.value:
+            ctypes.memmove(arr, recs, ctypes.sizeof(C.PairRecord) * n.value)
+        return PairRecords(arr)
+    finally:
+        c_free(ctypes.cast(recs, ctypes.c_void_p).value)
+
+
+def navigate(run, *, pair=None, dpca=None, progress=None, done=None, **opts):
+    """Navigates a run from its ping-pair estimates (as `sasnav navigate`).
+
+    run: a Run, or a StreamedRun (open_run: the pings are read from the
+    file as the pairs need them). opts: any field of sasnav_navigate_opts
+    (navigate.h) by name: method
+    ("subspace", "dpca", "aiding"), long_baselines, align, resolve,
+    use_aiding, motion_sigma=(s, w, y), link_sigma, long_sigma, eta_weight,
+    aiding_gate, speed_lags ("none", "dvl", "pairs"), aiding_bias_sigma,
+    threads (= nthreads); any other keyword that names a field of
+    sasnav_pair_opts (k, i, yaw_sigma, fix_yaw, ...) goes to the subspace
+    estimator, as do the entries of the dict `pair`; `dpca` is a dict of
+    sasnav_dpca_opts fields. progress(done, total, p, q, seconds) is called
+    before the first pair and after each (from the estimating thread).
+    done: PairRecords of pairs estimated already (navigate_part), taken
+    instead of estimated. Returns a Navigation."""
+    _check_navigable(run)
+    L = lib()
+    no = _navigate_opts(pair, dpca, opts)
+    if done is not None:
+        if not isinstance(done, PairRecords):
+            raise TypeError(f"done must be PairRecords (navigate_part), got {type(done).__name__}")
+        no.done = ctypes.cast(done._array, ctypes.POINTER(C.PairRecord))
+        no.n_done = len(done)
     cb = None
     if progress is not None:
         def _cb(pr, user):
@@ -1064,7 +1213,7 @@ def navigate(run, *, pair=None, dpca=None, progress=None, **opts):
         cb = C.PROGRESS_FN(_cb)
         no.progress = cb
     out = C.NavigationC()
-    with _c_run(run) as r:
+    with _run_arg(run) as r:
         check(L.sasnav_navigate(r, ctypes.byref(no), ctypes.byref(out)))
     try:
         truth = None if run.truth is None else ping_poses(run.truth).copy()
@@ -1103,8 +1252,10 @@ def image(run, grid=None, nav=None, *, ping=None, cgls=0, tikhonov=0.0, threads=
     poses), ping poses, or a NavData / Navigation. ping: image that ping
     alone; with cgls=K > 0 its CGLS pseudo-inverse (K iterations, Tikhonov
     weight `tikhonov`) instead of its backprojection. Returns an Image."""
-    if not isinstance(run, Run):
-        raise TypeError(f"expected a sasnav.Run, got {type(run).__name__}")
+    if not isinstance(run, (Run, StreamedRun)):
+        raise TypeError(f"expected a sasnav.Run or StreamedRun, got {type(run).__name__}")
+    if isinstance(run, StreamedRun) and ping is not None:
+        raise ValueError("ping= images one ping of a Run in memory (read_run), not of a StreamedRun")
     if isinstance(nav, str):
         if nav != "truth":
             raise ValueError(f"nav is None, 'truth', or ping poses (got {nav!r})")
@@ -1122,7 +1273,7 @@ def image(run, grid=None, nav=None, *, ping=None, cgls=0, tikhonov=0.0, threads=
     out = np.zeros((g.ny, g.nx), np.complex64)
     L = lib()
     if ping is None:
-        with _c_run(run) as r:
+        with _run_arg(run) as r:
             check(L.sasnav_backproject(r, _poses_ptr(poses), ctypes.byref(gc), ctypes.byref(oo),
                                        out.ctypes.data))
         return Image(out, g)
