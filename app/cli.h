@@ -55,8 +55,8 @@ int cli_parse_int(const char *text, long lo, long hi, long *out);
 /* Parses X0,X1,NX,Y0,Y1,NY into a grid. */
 int cli_parse_grid(const char *text, sasnav_grid *grid);
 
-/* MPI (app/mpi.c). `mpirun -np N sasnav navigate|image ...` runs N ranks
- * of one job; the other commands refuse more than one. Only rank 0 writes
+/* MPI (app/mpi.c). `mpirun -np N sasnav simulate|navigate|image ...` runs
+ * N ranks of one job; the other commands refuse more than one. Only rank 0 writes
  * files and prints results (the other ranks' stdout goes to /dev/null).
  * Without MPI in the build, or when not started by an MPI launcher: rank
  * 0 of 1 and no MPI call.

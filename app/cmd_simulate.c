@@ -34,7 +34,11 @@ static const char *help =
     "                   models; the config's 'aiding' section sets them;\n"
     "                   docs/config.md), which 'sasnav navigate' fuses\n"
     "  --threads N      OpenMP threads (default: all cores)\n"
-    "  -o FILE          output run file (HDF5)\n";
+    "  -o FILE          output run file (HDF5)\n"
+    "\n"
+    "The run is written ping by ping (memory: the scene and one ping).\n"
+    "'mpirun -np N sasnav simulate ...' spreads the pings over N processes;\n"
+    "rank 0 writes the same file as one process, bit for bit (docs/survey.md).\n";
 
 static int writer_put(void *ctx, int p, const sasnav_cfloat *samples)
 {
@@ -44,6 +48,96 @@ static int writer_put(void *ctx, int p, const sasnav_cfloat *samples)
 static int writer_get(void *ctx, int p, sasnav_cfloat *samples)
 {
     return sasnav_run_writer_get(ctx, p, samples);
+}
+
+/* `mpirun -np N sasnav simulate`: rank r makes the pings p with p % N == r
+ * (noise-free) and sends them to rank 0, which writes them in ping order,
+ * sums their power in that order, then adds the noise (one random stream,
+ * as one process does) and the aiding: the same file as one process, bit
+ * for bit. Takes the scene (freed). Returns the CLI status. */
+static int simulate_distributed(const sasnav_scenario *sc, sasnav_scene *scene, const sasnav_op_opts *oo,
+                                const char *output)
+{
+    int ranks = cli_mpi_size(), rank = cli_mpi_rank(), rank0_failed = 0;
+    sasnav_run *head = NULL;
+    sasnav_simulator *sim = NULL;
+    sasnav_run_writer *w = NULL;
+    int rc = sasnav_scenario_header(sc, &head);
+    if (!rc && !scene) rc = sasnav_scenario_scene(sc, &scene);
+    if (!rc) rc = sasnav_simulator_create(head, scene, oo, &sim);
+    size_t per_ping = head ? sasnav_run_ping_size(head) : 1;
+    sasnav_cfloat *buf = rc ? NULL : malloc(sizeof *buf * per_ping);
+    if (!rc && !buf) rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for a ping");
+    if (!rc && rank == 0) rc = sasnav_run_writer_open(output, head, &w);
+    if (cli_mpi_any(rc != 0, &rank0_failed)) {
+        if (rc && (rank == 0 || !rank0_failed)) cli_fail("simulate", rc, "simulation failed");
+        sasnav_run_writer_abort(w);
+        sasnav_simulator_destroy(sim);
+        sasnav_scene_free(scene);
+        sasnav_run_free(head);
+        free(buf);
+        return CLI_FAILURE;
+    }
+    cli_progress prog;
+    cli_progress_init(&prog, "simulate", "pings");
+    double power = 0;
+    int n = head->n_pings;
+    for (int p = 0; p < n && !rc; p++) {
+        int owner = p % ranks;
+        if (owner == rank) {
+            rc = sasnav_simulator_ping(sim, p, buf);
+            if (rc) cli_fail("simulate", rc, "simulation failed");
+            if (rank != 0) {
+                int st = rc;
+                cli_mpi_send(0, &st, sizeof st);
+                if (!rc) cli_mpi_send(0, buf, sizeof *buf * per_ping);
+                continue;
+            }
+        } else if (rank == 0) {
+            int st = 0;
+            cli_mpi_recv(owner, &st, sizeof st);
+            if (st) {
+                rc = st;
+                fprintf(stderr, "sasnav simulate: rank %d failed (above): %s not written\n", owner, output);
+                break;
+            }
+            cli_mpi_recv(owner, buf, sizeof *buf * per_ping);
+        } else {
+            continue;
+        }
+        /* rank 0 */
+        power = sasnav_ping_power(buf, per_ping, power);
+        rc = sasnav_run_writer_put(w, p, buf);
+        if (rc) cli_fail("simulate", rc, "cannot write %s", output);
+        else cli_progress_update(&prog, p + 1, n);
+    }
+    cli_progress_end(&prog);
+    sasnav_simulator_destroy(sim);
+    sasnav_scene_free(scene);
+    free(buf);
+    if (rank != 0) {
+        sasnav_run_free(head);
+        return rc ? CLI_FAILURE : 0;
+    }
+    if (!rc) {
+        sasnav_ping_sink sink = {writer_put, writer_get, w};
+        rc = sasnav_simulate_noise(sc, head, power / ((double)per_ping * (double)n), &sink);
+        if (!rc && sc->aiding.enabled) rc = sasnav_simulate_aiding(&sc->aiding, sc->traj.speed, head);
+        if (rc) cli_fail("simulate", rc, "simulation failed");
+    }
+    if (rc) {
+        sasnav_run_writer_abort(w);
+        sasnav_run_free(head);
+        cli_mpi_abort(CLI_FAILURE); /* the others may wait on a send */
+        return CLI_FAILURE;
+    }
+    rc = sasnav_run_writer_finish(w, head);
+    int rx = head->array.n_rx, ns = head->win.n_samples;
+    sasnav_run_free(head);
+    if (rc) return cli_fail("simulate", rc, "cannot write %s", output);
+    fprintf(stderr, "sasnav simulate: %s: %d pings x %d channels x %d samples%s -> %s (%d processes)\n",
+            sc->name, n, rx, ns, sc->aiding.enabled ? " + aiding" : "", output, ranks);
+    return 0;
 }
 
 int cmd_simulate(int argc, char **argv)
@@ -81,6 +175,8 @@ int cmd_simulate(int argc, char **argv)
     if (optind < argc) return cli_usage("simulate", "unexpected argument '%s'", argv[optind]);
     if (!output) return cli_usage("simulate", "an output file is required (-o run.h5)");
     if (omni && strcmp(preset, "tank")) return cli_usage("simulate", "--omni applies to --preset tank only");
+    if (!strcmp(preset, "tank") && cli_mpi_size() > 1)
+        return cli_usage("simulate", "--preset tank runs in one process, not in the %d of mpirun", cli_mpi_size());
     if (!strcmp(preset, "tank")) {
         if (config || snr || error || aiding)
             return cli_usage("simulate", "--preset tank takes only --seed, --omni and -o DIR");
@@ -138,6 +234,7 @@ int cmd_simulate(int argc, char **argv)
     sasnav_op_opts oo;
     sasnav_op_default_opts(&oo);
     oo.nthreads = (int)threads;
+    if (cli_mpi_size() > 1) return simulate_distributed(&sc, scene, &oo, output);
     /* Streamed: each ping is written as it is made (memory: the scene and
      * one ping, whatever the run's length). */
     sasnav_window win;

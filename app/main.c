@@ -51,7 +51,10 @@ static const command commands[] = {
 };
 
 /* Commands that split their work over the ranks of an MPI job. */
-static int runs_distributed(const char *name) { return !strcmp(name, "navigate") || !strcmp(name, "image"); }
+static int runs_distributed(const char *name)
+{
+    return !strcmp(name, "navigate") || !strcmp(name, "image") || !strcmp(name, "simulate");
+}
 
 static int run_command(int argc, char **argv);
 
@@ -82,8 +85,8 @@ static int run_command(int argc, char **argv)
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         if (!strcmp(argv[1], commands[i].name)) {
             if (cli_mpi_size() > 1 && !runs_distributed(argv[1]))
-                return cli_usage(argv[1], "runs as one process: of the commands, navigate and image "
-                                          "split their work over the %d processes of mpirun",
+                return cli_usage(argv[1], "runs as one process: of the commands, simulate, navigate and "
+                                          "image split their work over the %d processes of mpirun",
                                  cli_mpi_size());
             return commands[i].run(argc - 1, argv + 1);
         }

@@ -1,6 +1,7 @@
 #!/bin/sh
-# `mpirun -np N sasnav navigate|image` gives the same files as one process,
-# bit for bit (docs/survey.md): navigation by DPCA (all pairs) and by the
+# `mpirun -np N sasnav simulate|navigate|image` gives the same files as one
+# process, bit for bit (docs/survey.md): a simulation (2 ranks), navigation
+# by DPCA (all pairs) and by the
 # subspace estimator (coarse iterations, to keep it short), images with 2
 # and 3 ranks (uneven bands of rows). Commands that do not split their work
 # refuse several ranks with a usage error (2); --checkpoint too. Skipped
@@ -49,6 +50,10 @@ noise: {snr_db: 30}
 YAML
 "$CLI" simulate --config "$T/run.yaml" -o "$T/run.h5" 2> "$T/sim.err" ||
     { cat "$T/sim.err" >&2; fail "simulate"; exit 1; }
+# Simulation: pings over 2 ranks, the same file (noise and all).
+$MPIRUN -np 2 "$CLI" simulate --config "$T/run.yaml" -o "$T/run2.h5" 2> "$T/sim.err" ||
+    { cat "$T/sim.err" >&2; fail "simulate, 2 ranks"; }
+h5diff "$T/run.h5" "$T/run2.h5" > "$T/diff.txt" 2>&1 || { cat "$T/diff.txt" >&2; fail "simulate, 2 ranks: differs"; }
 
 # Same navigation file and same JSON (but timings and the process count).
 strip() { grep -v -e '"seconds' -e '"pairs_per_second"' -e '"processes"' -e '"threads_over_pairs"' "$1"; }

@@ -163,6 +163,29 @@ int sasnav_simulate_stream(const sasnav_scenario *sc, const sasnav_scene *scene,
                            const sasnav_op_opts *opts, const sasnav_ping_sink *sink,
                            sasnav_run **header, sasnav_ping_progress_fn progress, void *user);
 
+/* The pieces of sasnav_simulate_stream, for callers that spread the pings
+ * over processes (`mpirun sasnav simulate`): the same bits when the pings'
+ * power is summed in ping order and the noise added by one caller.
+ * sasnav_scenario_header: the run of a scenario without samples
+ * (navigation, truth, constants; free with sasnav_run_free).
+ * sasnav_scenario_scene: the scenario's own scene (ripples or points).
+ * sasnav_simulator_*: noise-free pings of a header's true poses from a
+ * scene (which both must outlive the simulator); ping p needs no other
+ * ping (any order, any process). sasnav_ping_power: acc + sum |s|^2 over n
+ * samples, in order (the mean power is its total over all pings in ping
+ * order / samples). sasnav_simulate_noise: the second pass (get, add noise
+ * of `mean_power` at the scenario's SNR, put; every ping in order). */
+typedef struct sasnav_simulator sasnav_simulator;
+int sasnav_scenario_header(const sasnav_scenario *sc, sasnav_run **header);
+int sasnav_scenario_scene(const sasnav_scenario *sc, sasnav_scene **scene);
+int sasnav_simulator_create(const sasnav_run *header, const sasnav_scene *scene, const sasnav_op_opts *opts,
+                            sasnav_simulator **sim);
+int sasnav_simulator_ping(sasnav_simulator *sim, int p, sasnav_cfloat *out);
+void sasnav_simulator_destroy(sasnav_simulator *sim);
+double sasnav_ping_power(const sasnav_cfloat *samples, size_t n, double acc);
+int sasnav_simulate_noise(const sasnav_scenario *sc, const sasnav_run *header, double mean_power,
+                          const sasnav_ping_sink *sink);
+
 #ifdef __cplusplus
 }
 #endif

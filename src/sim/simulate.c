@@ -100,67 +100,121 @@ static double sensor_radius(const sasnav_array *a, const sasnav_ping_pose *pose)
 typedef int (*put_fn)(void *ctx, int p, const sasnav_cfloat *samples);
 typedef int (*get_fn)(void *ctx, int p, sasnav_cfloat *samples);
 
-/* The pings of `run` (shape, truth) simulated into the sink; *power_out:
- * mean signal power over all samples. */
-static int simulate_pings(const sasnav_scene *scene, const sasnav_ping_pose *truth, const sasnav_run *run,
-                          const sasnav_op_opts *opts, put_fn put, void *ctx, double *power_out,
-                          sasnav_ping_progress_fn progress, void *user)
+struct sasnav_simulator {
+    const sasnav_run *run;    /* the header: shapes, truth */
+    const sasnav_scene *scene;
+    sasnav_op_opts opts;
+    sasnav_op *op;            /* whole-scene operator (no band selection) */
+    int select;               /* 1: each ping simulates its along-track band */
+    sorted_scene sorted;
+    double reach;             /* m: c t_last / 2 */
+};
+
+int sasnav_simulator_create(const sasnav_run *header, const sasnav_scene *scene, const sasnav_op_opts *opts,
+                            sasnav_simulator **out)
 {
-    size_t per_ping = (size_t)run->array.n_rx * (size_t)run->win.n_samples;
-    sasnav_cfloat *buf = malloc(sizeof *buf * per_ping);
-    if (!buf) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for a ping");
-    sasnav_op *op = NULL;
-    int rc = sasnav_op_create(&run->sys, &run->array, &run->win, scene->n, scene->x, scene->y, opts, &op);
+    if (!out) return sasnav_set_error(SASNAV_ERR_ARG, "NULL simulator output");
+    *out = NULL;
+    if (!header || !scene || !header->truth) return sasnav_set_error(SASNAV_ERR_ARG, "NULL simulation argument");
+    if (scene->n < 1) return sasnav_set_error(SASNAV_ERR_ARG, "empty scene");
+    sasnav_simulator *sim = calloc(1, sizeof *sim);
+    if (!sim) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    sim->run = header;
+    sim->scene = scene;
+    if (opts) sim->opts = *opts;
+    else sasnav_op_default_opts(&sim->opts);
+    const sasnav_run *run = header;
+    int rc = sasnav_op_create(&run->sys, &run->array, &run->win, scene->n, scene->x, scene->y, &sim->opts,
+                              &sim->op);
     if (rc) {
-        free(buf);
+        free(sim);
         return rc;
     }
     double t_first, t_last;
-    sasnav_op_delay_span(op, &t_first, &t_last);
-    double reach = 0.5 * run->sys.sound_speed * t_last;
+    sasnav_op_delay_span(sim->op, &t_first, &t_last);
+    sim->reach = 0.5 * run->sys.sound_speed * t_last;
     double xmin = INFINITY, xmax = -INFINITY;
     for (int i = 0; i < scene->n; i++) {
         if (scene->x[i] < xmin) xmin = scene->x[i];
         if (scene->x[i] > xmax) xmax = scene->x[i];
     }
-    sorted_scene sorted = {0};
-    int select = xmax - xmin > SELECT_FACTOR * 2.0 * (reach + sensor_radius(&run->array, &truth[0]));
-    if (select) {
-        sasnav_op_destroy(op);
-        op = NULL;
-        rc = sort_scene(scene, &sorted);
+    sim->select = xmax - xmin > SELECT_FACTOR * 2.0 * (sim->reach + sensor_radius(&run->array, &run->truth[0]));
+    if (sim->select) {
+        sasnav_op_destroy(sim->op);
+        sim->op = NULL;
+        rc = sort_scene(scene, &sim->sorted);
+        if (rc) {
+            free(sim);
+            return rc;
+        }
     }
+    *out = sim;
+    return SASNAV_OK;
+}
+
+int sasnav_simulator_ping(sasnav_simulator *sim, int p, sasnav_cfloat *out)
+{
+    if (!sim || !out || p < 0 || p >= sim->run->n_pings)
+        return sasnav_set_error(SASNAV_ERR_ARG, "simulator: bad ping %d", p);
+    const sasnav_run *run = sim->run;
+    const sasnav_ping_pose *pose = &run->truth[p];
+    if (!sim->select) {
+        int rc = sasnav_op_set_geometry(sim->op, pose);
+        return rc ? rc : sasnav_op_forward(sim->op, sim->scene->amp, out);
+    }
+    double band = sim->reach + sensor_radius(&run->array, pose) + 1e-6;
+    int k0 = lower_bound(&sim->sorted, pose->array.x - band);
+    int k1 = lower_bound(&sim->sorted, pose->array.x + band);
+    if (k1 <= k0) {
+        memset(out, 0, sizeof *out * sasnav_run_ping_size(run));
+        return SASNAV_OK;
+    }
+    sasnav_op *op = NULL;
+    int rc = sasnav_op_create(&run->sys, &run->array, &run->win, k1 - k0, sim->sorted.x + k0, sim->sorted.y + k0,
+                              &sim->opts, &op);
+    if (!rc) rc = sasnav_op_set_geometry(op, pose);
+    if (!rc) rc = sasnav_op_forward(op, sim->sorted.amp + k0, out);
+    sasnav_op_destroy(op);
+    return rc;
+}
+
+void sasnav_simulator_destroy(sasnav_simulator *sim)
+{
+    if (!sim) return;
+    sasnav_op_destroy(sim->op);
+    free(sim->sorted.x);
+    free(sim->sorted.y);
+    free(sim->sorted.amp);
+    free(sim);
+}
+
+double sasnav_ping_power(const sasnav_cfloat *samples, size_t n, double acc)
+{
+    for (size_t i = 0; i < n; i++) {
+        float re = crealf(samples[i]), im = cimagf(samples[i]);
+        acc += (double)re * re + (double)im * im;
+    }
+    return acc;
+}
+
+/* The pings of `run` (shape, truth) simulated into the sink; *power_out:
+ * mean signal power over all samples. */
+static int simulate_pings(const sasnav_scene *scene, const sasnav_run *run, const sasnav_op_opts *opts,
+                          put_fn put, void *ctx, double *power_out, sasnav_ping_progress_fn progress, void *user)
+{
+    size_t per_ping = sasnav_run_ping_size(run);
+    sasnav_cfloat *buf = malloc(sizeof *buf * per_ping);
+    if (!buf) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for a ping");
+    sasnav_simulator *sim = NULL;
+    int rc = sasnav_simulator_create(run, scene, opts, &sim);
     double power = 0;
     for (int p = 0; p < run->n_pings && !rc; p++) {
-        if (select) {
-            double band = reach + sensor_radius(&run->array, &truth[p]) + 1e-6;
-            int k0 = lower_bound(&sorted, truth[p].array.x - band);
-            int k1 = lower_bound(&sorted, truth[p].array.x + band);
-            if (k1 > k0) {
-                rc = sasnav_op_create(&run->sys, &run->array, &run->win, k1 - k0, sorted.x + k0, sorted.y + k0,
-                                      opts, &op);
-                if (!rc) rc = sasnav_op_set_geometry(op, &truth[p]);
-                if (!rc) rc = sasnav_op_forward(op, sorted.amp + k0, buf);
-                sasnav_op_destroy(op);
-                op = NULL;
-            } else {
-                memset(buf, 0, sizeof *buf * per_ping);
-            }
-        } else {
-            rc = sasnav_op_set_geometry(op, &truth[p]);
-            if (!rc) rc = sasnav_op_forward(op, scene->amp, buf);
-        }
-        for (size_t i = 0; !rc && i < per_ping; i++) {
-            float re = crealf(buf[i]), im = cimagf(buf[i]);
-            power += (double)re * re + (double)im * im;
-        }
+        rc = sasnav_simulator_ping(sim, p, buf);
+        if (!rc) power = sasnav_ping_power(buf, per_ping, power);
         if (!rc) rc = put(ctx, p, buf);
         if (!rc && progress) progress(p + 1, run->n_pings, user);
     }
-    sasnav_op_destroy(op);
-    free(sorted.x);
-    free(sorted.y);
-    free(sorted.amp);
+    sasnav_simulator_destroy(sim);
     free(buf);
     *power_out = power / ((double)per_ping * (double)run->n_pings);
     return rc;
@@ -194,6 +248,14 @@ static int add_noise(const sasnav_scenario *sc, const sasnav_run *run, double po
     return rc;
 }
 
+int sasnav_simulate_noise(const sasnav_scenario *sc, const sasnav_run *header, double mean_power,
+                          const sasnav_ping_sink *sink)
+{
+    if (!sc || !header || !sink || !sink->put || !sink->get)
+        return sasnav_set_error(SASNAV_ERR_ARG, "NULL simulation argument");
+    return add_noise(sc, header, mean_power, sink->put, sink->get, sink->ctx);
+}
+
 /* The in-memory sink: run->raw. */
 static int mem_put(void *ctx, int p, const sasnav_cfloat *samples)
 {
@@ -217,13 +279,17 @@ int sasnav_simulate_raw(const sasnav_scenario *sc, const sasnav_scene *scene,
         return sasnav_set_error(SASNAV_ERR_ARG, "NULL simulation argument");
     if (scene->n < 1) return sasnav_set_error(SASNAV_ERR_ARG, "empty scene");
     double power = 0;
-    int rc = simulate_pings(scene, truth, run, opts, mem_put, run, &power, NULL, NULL);
+    /* The poses to simulate with, in the run's truth slot for the call. */
+    sasnav_run view = *run;
+    view.truth = (sasnav_ping_pose *)truth;
+    int rc = simulate_pings(scene, &view, opts, mem_put, run, &power, NULL, NULL);
     if (!rc) rc = add_noise(sc, run, power, mem_put, mem_get, run);
     return rc;
 }
 
-static int scenario_scene(const sasnav_scenario *sc, sasnav_scene **scene)
+int sasnav_scenario_scene(const sasnav_scenario *sc, sasnav_scene **scene)
 {
+    if (!sc || !scene) return sasnav_set_error(SASNAV_ERR_ARG, "NULL scene argument");
     if (sc->scene_kind == SASNAV_SCENE_RIPPLES) return sasnav_scene_ripples(&sc->ripples, scene);
     if (sc->scene_kind == SASNAV_SCENE_POINTS) {
         sasnav_cfloat amp[SASNAV_MAX_TARGETS];
@@ -243,7 +309,9 @@ int sasnav_simulate(const sasnav_scenario *sc, const sasnav_scene *scene,
  * with_raw) for scenario sc. */
 static int scenario_header(const sasnav_scenario *sc, int with_raw, sasnav_run **out)
 {
+    if (!out) return sasnav_set_error(SASNAV_ERR_ARG, "NULL header output");
     *out = NULL;
+    if (!sc) return sasnav_set_error(SASNAV_ERR_ARG, "NULL scenario");
     int rc = sasnav_scenario_check(sc);
     if (rc) return rc;
     sasnav_window win;
@@ -292,16 +360,21 @@ static int simulate_into(const sasnav_scenario *sc, const sasnav_scene *scene, c
     sasnav_scene *own = NULL;
     int rc = SASNAV_OK;
     if (!scene) {
-        rc = scenario_scene(sc, &own);
+        rc = sasnav_scenario_scene(sc, &own);
         scene = own;
     }
     double power = 0;
     if (!rc && scene->n < 1) rc = sasnav_set_error(SASNAV_ERR_ARG, "empty scene");
-    if (!rc) rc = simulate_pings(scene, run->truth, run, opts, put, ctx, &power, progress, user);
+    if (!rc) rc = simulate_pings(scene, run, opts, put, ctx, &power, progress, user);
     if (!rc) rc = add_noise(sc, run, power, put, get, ctx);
     if (!rc && sc->aiding.enabled) rc = sasnav_simulate_aiding(&sc->aiding, sc->traj.speed, run);
     sasnav_scene_free(own);
     return rc;
+}
+
+int sasnav_scenario_header(const sasnav_scenario *sc, sasnav_run **header)
+{
+    return scenario_header(sc, 0, header);
 }
 
 int sasnav_simulate_progress(const sasnav_scenario *sc, const sasnav_scene *scene,

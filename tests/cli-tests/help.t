@@ -56,6 +56,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                      docs/config.md), which 'sasnav navigate' fuses
     --threads N      OpenMP threads (default: all cores)
     -o FILE          output run file (HDF5)
+  
+  The run is written ping by ping (memory: the scene and one ping).
+  'mpirun -np N sasnav simulate ...' spreads the pings over N processes;
+  rank 0 writes the same file as one process, bit for bit (docs/survey.md).
 
   $ sasnav image --help
   usage: sasnav image run.h5 [--nav nav.h5 | --truth] [--grid X0,X1,NX,Y0,Y1,NY]
