@@ -15,7 +15,8 @@
  *    ru_maxrss). Pairs per second, track metres imaged per second.
  * 2. Throughput with 1 and 2 processes (mpirun --oversubscribe, one thread
  *    each, when mpirun is on the PATH and the tool has MPI): subspace
- *    navigation of a 16-ping paper-trajectory run (pairs/s), DPCA
+ *    navigation of a 16-ping paper-trajectory run (pairs/s), simulation of
+ *    the longest run (pings/s), DPCA
  *    navigation of the longest run (pairs/s), and backprojection of a
  *    48-ping run on a 3.2 x 1.6 m grid of 3.125 mm pixels that every ping
  *    reaches (pixel x ping x channel updates/s). Outputs of 1 and 2 processes are compared
@@ -204,6 +205,24 @@ int main(int argc, char **argv)
         printf("navigate subspace, 15 pairs: %ld process%s %8.2f s  %6.3f pairs/s  peak %6.1f MiB  %s%s\n",
                ranks[j], ranks[j] > 1 ? "es" : "  ", s.seconds, 15 / s.seconds, s.peak_mib,
                j == 0 ? "" : same_files(first, out) ? "same as 1" : "DIFFERS", s.status ? "  FAILED" : "");
+    }
+    /* Simulation of the longest run of part 1 by 1 and 2 processes. */
+    long nsim = pings[np - 1];
+    snprintf(cfg, sizeof cfg, "%s/run%ld.yaml", dir, nsim);
+    for (int j = 0; j < nr; j++) {
+        if (ranks[j] > 1 && !mpi) continue;
+        snprintf(out, sizeof out, "%s/sim-r%ld.h5", dir, ranks[j]);
+        char *rest[] = {"simulate", "--config", cfg, "-o", out, NULL};
+        command(argvs, (int)ranks[j], sasnav, rest);
+        run_stats s = run(argvs, log);
+        if (j == 0) snprintf(first, sizeof first, "%s", out);
+        printf("simulate, %ld pings: %ld process%s %8.2f s  %8.1f pings/s  %s%s\n", nsim, ranks[j],
+               ranks[j] > 1 ? "es" : "  ", s.seconds, nsim / s.seconds,
+               j == 0 ? "" : same_files(first, out) ? "same as 1" : "DIFFERS", s.status ? "  FAILED" : "");
+    }
+    for (int j = 0; j < nr; j++) {
+        snprintf(out, sizeof out, "%s/sim-r%ld.h5", dir, ranks[j]);
+        remove(out);
     }
     long nbig = pings[np - 1];
     snprintf(runf, sizeof runf, "%s/run%ld.h5", dir, nbig);
