@@ -107,28 +107,29 @@ int cli_mpi_gather(const void *mine, size_t n, void **all, size_t *n_all)
     int *counts = NULL, *displs = NULL;
     char *buf = NULL;
     int fail = 0;
+    /* Rank 0's allocations are agreed on before each collective that uses
+     * them (a failure is every rank's return, never a mismatched call). */
     if (mpi_rank == 0) {
         counts = malloc(sizeof(int) * (size_t)mpi_size);
         displs = malloc(sizeof(int) * (size_t)mpi_size);
         fail = !counts || !displs;
     }
-    MPI_Gather(&count, 1, MPI_INT, counts, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    MPI_Bcast(&fail, 1, MPI_INT, 0, MPI_COMM_WORLD);
     size_t total = 0;
-    if (mpi_rank == 0 && !fail) {
-        for (int r = 0; r < mpi_size; r++) {
-            displs[r] = (int)total;
-            total += (size_t)counts[r];
+    if (!fail) {
+        MPI_Gather(&count, 1, MPI_INT, counts, 1, MPI_INT, 0, MPI_COMM_WORLD);
+        if (mpi_rank == 0) {
+            for (int r = 0; r < mpi_size; r++) {
+                displs[r] = (int)total;
+                total += (size_t)counts[r];
+            }
+            fail = total > (size_t)0x7fffffff || !(buf = malloc(total > 0 ? total : 1));
         }
-        fail = total > (size_t)0x7fffffff || !(buf = malloc(total > 0 ? total : 1));
+        MPI_Bcast(&fail, 1, MPI_INT, 0, MPI_COMM_WORLD);
     }
-    /* Every rank must take part in the Gatherv; rank 0 reports a failure
-     * afterwards (receiving into nothing: counts all zero). */
-    if (mpi_rank == 0 && fail && counts)
-        for (int r = 0; r < mpi_size; r++) counts[r] = displs ? (displs[r] = 0) : 0;
-    MPI_Gatherv(mine, count, MPI_BYTE, buf, counts, displs, MPI_BYTE, 0, MPI_COMM_WORLD);
+    if (!fail) MPI_Gatherv(mine, count, MPI_BYTE, buf, counts, displs, MPI_BYTE, 0, MPI_COMM_WORLD);
     free(counts);
     free(displs);
-    MPI_Bcast(&fail, 1, MPI_INT, 0, MPI_COMM_WORLD);
     if (fail) {
         free(buf);
         return 1;
