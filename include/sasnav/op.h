@@ -87,6 +87,12 @@ int sasnav_op_create(const sasnav_system *sys, const sasnav_array *array,
                      const sasnav_window *win, int n_points, const double *x,
                      const double *y, const sasnav_op_opts *opts, sasnav_op **op);
 
+/* Replaces the operator's points (as at create; arrays copied), keeping its
+ * plans and tables: for callers that evaluate many small point sets (fast
+ * factorised backprojection). Storage grows when needed. The geometry must
+ * be set again. */
+int sasnav_op_set_points(sasnav_op *op, int n_points, const double *x, const double *y);
+
 /* Sets the ping geometry (tx pose at transmission, array pose at reception):
  * computes delays (double precision), Green's functions and kernel weights.
  * Returns SASNAV_ERR_GEOMETRY if a point coincides with a sensor. */

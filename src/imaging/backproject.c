@@ -2,6 +2,7 @@
  * adjoint ping operators, on a user grid, with given navigation. */
 #include "sasnav/error.h"
 #include "sasnav/image.h"
+#include "backproject_internal.h"
 
 #include <complex.h>
 #include <limits.h>
@@ -40,8 +41,8 @@ int sasnav_backproject_rows(const sasnav_run *run, const sasnav_ping_pose *nav,
  * ping that cannot would contribute exact zeros (all its pairs dropped):
  * skipping it changes no bit and makes a long survey's cost linear in its
  * length instead of quadratic. Conservative: a nanosecond of margin. */
-static int ping_reaches(const sasnav_run *run, const sasnav_ping_pose *pose, double xa, double xb,
-                        double ya, double yb, double t_last)
+int sasnav_bp_ping_reaches(const sasnav_run *run, const sasnav_ping_pose *pose, double xa,
+                           double xb, double ya, double yb, double t_last)
 {
     double cx = pose->array.x, cy = pose->array.y;
     double radius = hypot(pose->tx.x - cx, pose->tx.y - cy);
@@ -95,7 +96,7 @@ static int backproject_one(const sasnav_run *run, const sasnav_ping_pose *nav,
     sasnav_op_delay_span(op, &t_first, &t_last);
     memset(tile, 0, sizeof *tile * np);
     for (int p = 0; p < run->n_pings && !rc; p++) {
-        if (ping_reaches(run, &nav[p], xa, xb, ya, yb, t_last)) {
+        if (sasnav_bp_ping_reaches(run, &nav[p], xa, xb, ya, yb, t_last)) {
             const sasnav_cfloat *ping = NULL;
             rc = sasnav_run_get_ping(run, p, ping_buf, &ping);
             if (!rc) rc = sasnav_op_set_geometry(op, &nav[p]);
@@ -109,6 +110,17 @@ static int backproject_one(const sasnav_run *run, const sasnav_ping_pose *nav,
         memcpy(out + (size_t)iy * stride, tile + (size_t)iy * (size_t)w, sizeof *tile * (size_t)w);
     free(tile);
     return rc;
+}
+
+void sasnav_bp_tile_size(const sasnav_run *run, int cols, int rows, int *tw, int *th)
+{
+    int side = (int)floor(sqrt((double)SASNAV_BACKPROJECT_TILE_PAIRS / run->array.n_rx));
+    if (side < 1) side = 1;
+    *tw = cols < side ? cols : side;
+    *th = rows < side ? rows : side;
+    if (*tw < side) *th = (int)(SASNAV_BACKPROJECT_TILE_PAIRS / run->array.n_rx / *tw); /* narrow: taller tiles */
+    if (*th > rows) *th = rows;
+    if (*th < 1) *th = 1;
 }
 
 int sasnav_backproject_tile(const sasnav_run *run, const sasnav_ping_pose *nav,
@@ -126,12 +138,8 @@ int sasnav_backproject_tile(const sasnav_run *run, const sasnav_ping_pose *nav,
                                 col1 - 1, row0, row1 - 1, grid->nx, grid->ny);
     /* Square tiles of at most SASNAV_BACKPROJECT_TILE_PAIRS (pixel,
      * channel) pairs: the operator's memory is per pair. */
-    int side = (int)floor(sqrt((double)SASNAV_BACKPROJECT_TILE_PAIRS / run->array.n_rx));
-    if (side < 1) side = 1;
-    int tw = col1 - col0 < side ? col1 - col0 : side, th = row1 - row0 < side ? row1 - row0 : side;
-    if (tw < side) th = (int)(SASNAV_BACKPROJECT_TILE_PAIRS / run->array.n_rx / tw); /* narrow: taller tiles */
-    if (th > row1 - row0) th = row1 - row0;
-    if (th < 1) th = 1;
+    int tw, th;
+    sasnav_bp_tile_size(run, col1 - col0, row1 - row0, &tw, &th);
     long ntx = (col1 - col0 + tw - 1) / tw, nty = (row1 - row0 + th - 1) / th;
     long steps = ntx * nty * run->n_pings, step = 0;
     sasnav_cfloat *ping_buf = NULL;

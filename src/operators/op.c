@@ -119,6 +119,7 @@ struct sasnav_op {
     float *green;           /* G as (re, im) */
     long n_dropped;
     int have_geometry;
+    int cap_points;         /* points the per-pair storage holds */
 
     /* FFT plans and work buffers. */
     fftwf_plan fine_fwd, fine_bwd, coarse_fwd, coarse_bwd;
@@ -444,7 +445,8 @@ static int setup_taps(sasnav_op *op)
     return rc;
 }
 
-static int setup_storage(sasnav_op *op)
+/* The per-point and per-pair arrays for op->n_points points. */
+static int setup_point_storage(sasnav_op *op)
 {
     size_t np = (size_t)op->n_points;
     op->n_blocks = (int)((np + BLOCK - 1) / BLOCK);
@@ -456,12 +458,36 @@ static int setup_storage(sasnav_op *op)
     op->index = calloc(op->n_pairs, sizeof *op->index);
     op->taps = calloc(op->n_pairs * (size_t)op->wpad, sizeof *op->taps);
     op->green = calloc(2 * op->n_pairs, sizeof *op->green);
+    op->cap_points = op->n_points;
+    if (!op->x || !op->y || !op->tx_range || !op->tx_gain || !op->index || !op->taps || !op->green)
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "op: out of memory (%zu pairs)", op->n_pairs);
+    return SASNAV_OK;
+}
+
+static void free_point_storage(sasnav_op *op)
+{
+    free(op->x);
+    free(op->y);
+    free(op->tx_range);
+    free(op->tx_gain);
+    free(op->index);
+    free(op->taps);
+    free(op->green);
+    op->x = op->y = op->tx_range = op->tx_gain = NULL;
+    op->index = NULL;
+    op->taps = op->green = NULL;
+    op->cap_points = 0;
+}
+
+static int setup_storage(sasnav_op *op)
+{
+    int rc = setup_point_storage(op);
+    if (rc) return rc;
     size_t fine = (size_t)op->lf + (size_t)op->ext;
     op->adj_re = fftwf_malloc((size_t)op->n_rx * fine * sizeof(float));
     op->adj_im = fftwf_malloc((size_t)op->n_rx * fine * sizeof(float));
     op->work = calloc((size_t)op->nthreads, sizeof *op->work);
-    if (!op->x || !op->y || !op->tx_range || !op->tx_gain || !op->index || !op->taps ||
-        !op->green || !op->adj_re || !op->adj_im || !op->work)
+    if (!op->adj_re || !op->adj_im || !op->work)
         return sasnav_set_error(SASNAV_ERR_NOMEM, "op: out of memory (%zu pairs)", op->n_pairs);
     for (int t = 0; t < op->nthreads; t++) {
         op_work *w = &op->work[t];
@@ -569,6 +595,31 @@ int sasnav_op_create(const sasnav_system *sys, const sasnav_array *array, const 
     return SASNAV_OK;
 }
 
+int sasnav_op_set_points(sasnav_op *op, int n_points, const double *x, const double *y)
+{
+    if (!op) return sasnav_set_error(SASNAV_ERR_ARG, "op: NULL operator");
+    int rc = check_points(n_points, x, y);
+    if (rc) return rc;
+    op->have_geometry = 0;
+    if (n_points > op->cap_points) {
+        free_point_storage(op);
+        op->n_points = n_points;
+        rc = setup_point_storage(op);
+        if (rc) {
+            free_point_storage(op);
+            op->n_points = 0;
+            return rc;
+        }
+    }
+    op->n_points = n_points;
+    op->n_blocks = (n_points + BLOCK - 1) / BLOCK;
+    op->n_pairs = (size_t)op->n_blocks * BLOCK * (size_t)op->n_rx;
+    memcpy(op->x, x, (size_t)n_points * sizeof *x);
+    memcpy(op->y, y, (size_t)n_points * sizeof *y);
+    select_kernels(op);
+    return SASNAV_OK;
+}
+
 void sasnav_op_destroy(sasnav_op *op)
 {
     if (!op) return;
@@ -588,13 +639,7 @@ void sasnav_op_destroy(sasnav_op *op)
     }
     fftwf_free(op->adj_re);
     fftwf_free(op->adj_im);
-    free(op->x);
-    free(op->y);
-    free(op->tx_range);
-    free(op->tx_gain);
-    free(op->index);
-    free(op->taps);
-    free(op->green);
+    free_point_storage(op);
     free(op->spectral);
     free(op->tap_coef);
     free(op);

@@ -1,0 +1,16 @@
+/* Internal: pieces shared by direct and factorised backprojection. */
+#ifndef SASNAV_BACKPROJECT_INTERNAL_H
+#define SASNAV_BACKPROJECT_INTERNAL_H
+
+#include "sasnav/image.h"
+
+/* Whether ping `pose` can reach the rectangle [xa, xb] x [ya, yb] within
+ * the operator's kept delays (t_last: sasnav_op_delay_span). */
+int sasnav_bp_ping_reaches(const sasnav_run *run, const sasnav_ping_pose *pose, double xa,
+                           double xb, double ya, double yb, double t_last);
+
+/* Side of the square tiles of SASNAV_BACKPROJECT_TILE_PAIRS pairs, and
+ * the tile size over a (cols x rows) rectangle. */
+void sasnav_bp_tile_size(const sasnav_run *run, int cols, int rows, int *tw, int *th);
+
+#endif
