@@ -43,6 +43,21 @@ void sasnav_ripple_default(sasnav_ripple_params *params);
 int sasnav_scene_ripples(const sasnav_ripple_params *params, sasnav_scene **scene);
 
 /* Scene of n point targets (arrays copied). */
+/* A survey seabed (the "survey" preset, docs/config.md): over the
+ * rectangle of `p` (density, background, ripple period/angle/depth and seed
+ * used; the disc ignored), zones about 40 m long along track of sand
+ * (speckle at 0.5 background), rippled sand (speckle modulated as the
+ * ripple scene) and mud (0.2); rocks (one per 150 m^2: 40 bright
+ * scatterers within 0.2-0.8 m); and every 25 m along track a man-made
+ * target at a random range: a sphere (one point 30 times the speckle's
+ * scatterer scale) or a 2 m x 0.5 m cylinder (its two edges as coherent
+ * lines of scatterers 8 times that scale). The
+ * targets' centres are written to targets_x/y (up to max_targets; NULL
+ * for none) and their number to *n_targets. Seeded: the same seed, the
+ * same scene. */
+int sasnav_scene_survey(const sasnav_ripple_params *p, int max_targets, double *targets_x,
+                        double *targets_y, int *n_targets, sasnav_scene **scene);
+
 int sasnav_scene_points(int n, const double *x, const double *y, const sasnav_cfloat *amp,
                         sasnav_scene **scene);
 

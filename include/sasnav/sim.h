@@ -23,7 +23,9 @@ extern "C" {
 typedef enum {
     SASNAV_SCENE_RIPPLES = 0, /* paper scene: speckle + ripples + disc */
     SASNAV_SCENE_POINTS = 1,  /* point targets listed in the scenario */
-    SASNAV_SCENE_FILE = 2     /* image file (HDF5 image layout) */
+    SASNAV_SCENE_FILE = 2,    /* image file (HDF5 image layout) */
+    SASNAV_SCENE_SURVEY = 3   /* survey seabed (sasnav_scene_survey) over the
+                                 ripple parameters' rectangle */
 } sasnav_scene_kind;
 
 /* Trajectory model: a nominal straight track along +x at y = 0 and smooth
@@ -99,7 +101,8 @@ typedef struct {
 } sasnav_scenario;
 
 /* Built-in presets: "paper-pair", "paper-trajectory", "point" (one point
- * target in paper-pair geometry). Returns SASNAV_ERR_ARG for unknown names. */
+ * target in paper-pair geometry), "survey" (a 300 kHz survey SAS over a
+ * 100 m varied seabed at 25-120 m range; docs/config.md). Returns SASNAV_ERR_ARG for unknown names. */
 int sasnav_scenario_preset(const char *name, sasnav_scenario *sc);
 
 /* Seeds every random draw of a scenario from one number S (what

@@ -144,7 +144,7 @@ static const key_spec config_keys[] = {
     {"trajectory.pair_error", "sway", V_REAL, PE(sway), R_ANY, 0, 0, "m"},
     {"trajectory.pair_error", "yaw", V_REAL, PE(yaw), R_ANY, 0, 0, "rad"},
 
-    {"scene", "kind", V_SCENE_KIND, SC(scene_kind), R_ANY, 0, 0, "ripples | points | file"},
+    {"scene", "kind", V_SCENE_KIND, SC(scene_kind), R_ANY, 0, 0, "ripples | points | file | survey"},
     {"scene", "file", V_STRING, SC(scene_file), R_ANY, 0,
      sizeof(((sasnav_scenario *)0)->scene_file), "HDF5 image (kind: file)"},
     {"scene", "x_min", V_REAL, SC(ripples.x_min), R_ANY, 0, 0, "m, speckle field extent"},
@@ -200,7 +200,7 @@ static const char *const sections[] = {"system", "array", "swath", "trajectory",
 
 static const char *const taper_names[] = {"none", "hann", "hamming"};
 static const char *const atten_names[] = {"exploding", "spherical", "none"};
-static const char *const kind_names[] = {"ripples", "points", "file"};
+static const char *const kind_names[] = {"ripples", "points", "file", "survey"};
 
 /* ---- C-locale scope for number formatting ---- */
 
@@ -577,7 +577,7 @@ static int read_value(loader *L, const key_spec *k, struct fy_node *value, int l
         if (!rc) *(sasnav_attenuation *)field = (sasnav_attenuation)choice;
         return rc;
     case V_SCENE_KIND:
-        rc = read_choice(L, value, line, kind_names, 3, &choice);
+        rc = read_choice(L, value, line, kind_names, 4, &choice);
         if (!rc) *(sasnav_scene_kind *)field = (sasnav_scene_kind)choice;
         return rc;
     case V_POSITIONS: return read_positions(L, value, line);
@@ -786,7 +786,7 @@ static int cross_check(loader *L)
         return fail(L, 0, "scene.kind is points but scene.targets is empty");
     if (sc->scene_kind == SASNAV_SCENE_FILE && !sc->scene_file[0])
         return fail(L, 0, "scene.kind is file but scene.file is not given");
-    if (sc->scene_kind == SASNAV_SCENE_RIPPLES &&
+    if ((sc->scene_kind == SASNAV_SCENE_RIPPLES || sc->scene_kind == SASNAV_SCENE_SURVEY) &&
         !(sc->ripples.x_min < sc->ripples.x_max && sc->ripples.y_min < sc->ripples.y_max))
         return fail(L, 0, "scene.x_min < scene.x_max and scene.y_min < scene.y_max are required");
     return SASNAV_OK;

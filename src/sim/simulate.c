@@ -291,6 +291,8 @@ int sasnav_scenario_scene(const sasnav_scenario *sc, sasnav_scene **scene)
 {
     if (!sc || !scene) return sasnav_set_error(SASNAV_ERR_ARG, "NULL scene argument");
     if (sc->scene_kind == SASNAV_SCENE_RIPPLES) return sasnav_scene_ripples(&sc->ripples, scene);
+    if (sc->scene_kind == SASNAV_SCENE_SURVEY)
+        return sasnav_scene_survey(&sc->ripples, 0, NULL, NULL, NULL, scene);
     if (sc->scene_kind == SASNAV_SCENE_POINTS) {
         sasnav_cfloat amp[SASNAV_MAX_TARGETS];
         for (int i = 0; i < sc->n_targets; i++) amp[i] = (float)sc->target_amp[i];
