@@ -119,12 +119,15 @@ static int image_tiles(const char *output, const sasnav_run *run, const sasnav_p
                        const sasnav_grid *g, const sasnav_op_opts *oo, const sasnav_ffbp_opts *ffbp)
 {
     int ranks = cli_mpi_size(), rank = cli_mpi_rank();
-    int side = (int)floor(sqrt((double)SASNAV_BACKPROJECT_TILE_PAIRS / run->array.n_rx));
+    int side = (int)floor(sqrt((double)(ffbp ? SASNAV_FFBP_TILE_PAIRS : SASNAV_BACKPROJECT_TILE_PAIRS) /
+                               run->array.n_rx));
     if (side < 1) side = 1;
     int tw = g->nx < side ? g->nx : side, th = g->ny < side ? g->ny : side;
     int ntx = (g->nx + tw - 1) / tw;
-    if (ranks > 1) {
-        /* At least four tiles per rank, for balance. */
+    if (ranks > 1 && !ffbp) {
+        /* At least four tiles per rank, for balance. (Not for FFBP, whose
+         * values depend on the tiles: the same tiles as one process give
+         * the same bits.) */
         int rows_wanted = (4 * ranks + ntx - 1) / ntx;
         int h = (g->ny + rows_wanted - 1) / rows_wanted;
         if (h < th) th = h > 0 ? h : 1;

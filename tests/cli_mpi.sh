@@ -90,6 +90,14 @@ for n in $RANKS; do
     h5diff "$T/img1.h5" "$T/img$n.h5" > "$T/diff.txt" 2>&1 || { cat "$T/diff.txt" >&2; fail "image, $n ranks: differs"; }
 done
 
+# FFBP: two tiles (1101 columns of 1024), dealt to the ranks; the same tiles
+# as one process, so the same bits.
+"$CLI" image "$T/run.h5" --ffbp --grid -0.6,0.6,1101,9.9,10.1,21 -o "$T/ffbp1.h5" 2> "$T/img.err" ||
+    { cat "$T/img.err" >&2; fail "image --ffbp, one process"; }
+$MPIRUN -np 2 "$CLI" image "$T/run.h5" --ffbp --grid -0.6,0.6,1101,9.9,10.1,21 -o "$T/ffbp2.h5" 2> "$T/img.err" ||
+    { cat "$T/img.err" >&2; fail "image --ffbp, 2 ranks"; }
+h5diff "$T/ffbp1.h5" "$T/ffbp2.h5" > "$T/diff.txt" 2>&1 || { cat "$T/diff.txt" >&2; fail "image --ffbp, 2 ranks: differs"; }
+
 # Failures: a missing input fails once (rank 0 speaks), status 1, no output.
 $MPIRUN -np 2 "$CLI" navigate "$T/absent.h5" -o "$T/none.h5" > /dev/null 2> "$T/err.txt"
 st=$?

@@ -7,6 +7,8 @@
 #include "sasnav/error.h"
 #include "sasnav/image.h"
 #include "sasnav/op.h"
+#include "sasnav/run.h"
+#include "sasnav/scene.h"
 #include "sasnav/sim.h"
 #include "testutil.h"
 
@@ -193,8 +195,69 @@ static void test_set_points(const sasnav_run *run)
     free(b);
 }
 
+/* The survey preset and its seabed: consistent timing, seeded scenes,
+ * content within the extent, bad parameters refused, a two-ping run. */
+static void test_survey(void)
+{
+    sasnav_scenario sc;
+    CHECK_OK(sasnav_scenario_preset("survey", &sc));
+    CHECK_OK(sasnav_scenario_check(&sc));
+    /* The ping interval is the two-way time to the far range. */
+    double pri = sc.traj.ping_spacing / sc.traj.speed;
+    CHECK(fabs(pri - 2 * sc.range_max / sc.sys.sound_speed) < 1e-12, "ping interval %g s", pri);
+    double array = sc.array.rx_u[sc.array.n_rx - 1] - sc.array.rx_u[0] + 0.05;
+    CHECK(sc.traj.ping_spacing < array / 2, "ping spacing %g m under half the %g m array", sc.traj.ping_spacing,
+          array);
+    sasnav_ripple_params rp = sc.ripples;
+    rp.x_min = 0;
+    rp.x_max = 60;
+    sasnav_scene *a = NULL, *b = NULL, *c = NULL;
+    double tx[8], ty[8];
+    int nt = 0;
+    CHECK_OK(sasnav_scene_survey(&rp, 8, tx, ty, &nt, &a));
+    CHECK_OK(sasnav_scene_survey(&rp, 0, NULL, NULL, NULL, &b));
+    rp.seed += 1;
+    CHECK_OK(sasnav_scene_survey(&rp, 0, NULL, NULL, NULL, &c));
+    if (a && b && c) {
+        CHECK(nt == 2, "targets every 25 m: %d in 60 m", nt);
+        CHECK(a->n == b->n && !memcmp(a->x, b->x, sizeof(double) * (size_t)a->n) &&
+                  !memcmp(a->amp, b->amp, sizeof *a->amp * (size_t)a->n),
+              "the same seed gives the same scene");
+        CHECK(a->n != c->n || memcmp(a->x, c->x, sizeof(double) * (size_t)a->n), "another seed, another scene");
+        double area = 60 * (rp.y_max - rp.y_min);
+        CHECK(a->n >= area * rp.density, "%d scatterers for %g m^2 at %g/m^2", a->n, area, rp.density);
+        int outside = 0;
+        for (int i = 0; i < a->n; i++)
+            /* Rocks reach 0.8 m and cylinders 1.03 m beyond their centres. */
+            outside += a->x[i] < rp.x_min - 1.1 || a->x[i] > rp.x_max + 1.1 || a->y[i] < rp.y_min - 1.1 ||
+                       a->y[i] > rp.y_max + 1.1 || !isfinite(crealf(a->amp[i]));
+        CHECK(outside == 0, "%d scatterers outside the seabed", outside);
+        for (int t = 0; t < nt; t++)
+            CHECK(tx[t] > rp.x_min && tx[t] < rp.x_max && ty[t] > rp.y_min && ty[t] < rp.y_max, "target %d", t);
+    }
+    sasnav_scene_free(a);
+    sasnav_scene_free(b);
+    sasnav_scene_free(c);
+    rp.density = 0;
+    CHECK(sasnav_scene_survey(&rp, 0, NULL, NULL, NULL, &a) == SASNAV_ERR_ARG, "zero density is refused");
+    rp.density = 20;
+    rp.ripple_depth = 2;
+    CHECK(sasnav_scene_survey(&rp, 0, NULL, NULL, NULL, &a) == SASNAV_ERR_ARG, "ripple depth 2 is refused");
+    /* Two pings over a short stretch of seabed. */
+    sc.traj.n_pings = 2;
+    sc.ripples.x_max = 10;
+    sasnav_run *run = NULL;
+    CHECK_OK(sasnav_simulate(&sc, NULL, NULL, &run));
+    if (run) {
+        CHECK(run->array.n_rx == 32 && run->n_pings == 2, "survey run shape");
+        CHECK_OK(sasnav_run_check(run));
+    }
+    sasnav_run_free(run);
+}
+
 int main(void)
 {
+    test_survey();
     sasnav_run *run = point_run();
     if (!run) return test_summary("test_ffbp");
     test_points(run);

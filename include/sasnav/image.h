@@ -88,13 +88,20 @@ int sasnav_backproject_rows(const sasnav_run *run, const sasnav_ping_pose *nav,
  * interpolated onto its pixels; tiles as sasnav_backproject_tile. Where a
  * polar frame does not suit (pixels near the track's line or near
  * end-fire), those pings go through the direct operator. Deterministic:
- * the same bits for the same inputs and any thread count. */
+ * the same bits for the same inputs and any thread count. Unlike the
+ * direct sum, a pixel's value depends (within the error) on the tile it is
+ * made in: the same rectangle, split the same way, gives the same bits. */
 typedef struct {
     double oversampling;  /* polar sampling over the Nyquist rate (default 2;
                              1.25..4): the interpolation error's knob */
 } sasnav_ffbp_opts;
 
 void sasnav_ffbp_default_opts(sasnav_ffbp_opts *opts);
+
+/* FFBP tiles: at most this many (pixel, channel) pairs (4x the direct
+ * tiles: their memory is the leaves' polar grids, a fraction of the
+ * pixels; larger tiles spend less on the grids' margins). */
+#define SASNAV_FFBP_TILE_PAIRS (1L << 24)
 
 /* FFBP of pixels col0 .. col1 - 1 x rows row0 .. row1 - 1 (as
  * sasnav_backproject_tile; fopts NULL: defaults). */

@@ -112,15 +112,20 @@ static int backproject_one(const sasnav_run *run, const sasnav_ping_pose *nav,
     return rc;
 }
 
-void sasnav_bp_tile_size(const sasnav_run *run, int cols, int rows, int *tw, int *th)
+void sasnav_bp_tile_size_pairs(const sasnav_run *run, long pairs, int cols, int rows, int *tw, int *th)
 {
-    int side = (int)floor(sqrt((double)SASNAV_BACKPROJECT_TILE_PAIRS / run->array.n_rx));
+    int side = (int)floor(sqrt((double)pairs / run->array.n_rx));
     if (side < 1) side = 1;
     *tw = cols < side ? cols : side;
     *th = rows < side ? rows : side;
-    if (*tw < side) *th = (int)(SASNAV_BACKPROJECT_TILE_PAIRS / run->array.n_rx / *tw); /* narrow: taller tiles */
+    if (*tw < side) *th = (int)(pairs / run->array.n_rx / *tw); /* narrow: taller tiles */
     if (*th > rows) *th = rows;
     if (*th < 1) *th = 1;
+}
+
+void sasnav_bp_tile_size(const sasnav_run *run, int cols, int rows, int *tw, int *th)
+{
+    sasnav_bp_tile_size_pairs(run, SASNAV_BACKPROJECT_TILE_PAIRS, cols, rows, tw, th);
 }
 
 int sasnav_backproject_tile(const sasnav_run *run, const sasnav_ping_pose *nav,

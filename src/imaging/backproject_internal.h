@@ -12,5 +12,6 @@ int sasnav_bp_ping_reaches(const sasnav_run *run, const sasnav_ping_pose *pose, 
 /* Side of the square tiles of SASNAV_BACKPROJECT_TILE_PAIRS pairs, and
  * the tile size over a (cols x rows) rectangle. */
 void sasnav_bp_tile_size(const sasnav_run *run, int cols, int rows, int *tw, int *th);
+void sasnav_bp_tile_size_pairs(const sasnav_run *run, long pairs, int cols, int rows, int *tw, int *th);
 
 #endif

@@ -599,7 +599,7 @@ int sasnav_ffbp_tile(const sasnav_run *run, const sasnav_ping_pose *nav, const s
         sasnav_op_destroy(probe);
     }
     int tw, th;
-    sasnav_bp_tile_size(run, col1 - col0, row1 - row0, &tw, &th);
+    sasnav_bp_tile_size_pairs(run, SASNAV_FFBP_TILE_PAIRS, col1 - col0, row1 - row0, &tw, &th);
     long ntx = (col1 - col0 + tw - 1) / tw, nty = (row1 - row0 + th - 1) / th, step = 0;
     cx->step = &step;
     cx->steps = ntx * nty * run->n_pings;

@@ -116,8 +116,9 @@ int sasnav_scenario_preset(const char *name, sasnav_scenario *sc)
         sc->snr_db = 30.0;
         sc->noise_seed = 11;
         sasnav_aiding_default(&sc->aiding);
-        /* A 20 m x 20 m patch at mid-swath, 2 cm pixels. */
-        sasnav_grid_make(38.0, 58.0, 1001, 60.0, 80.0, 1001, &sc->image_grid);
+        /* A 10 m x 10 m patch at mid-swath, 1 cm pixels (the image's
+         * Nyquist spacing: 1.25 cm in range, 2.5 cm along track). */
+        sasnav_grid_make(43.0, 53.0, 1001, 65.0, 75.0, 1001, &sc->image_grid);
     } else {
         return sasnav_set_error(SASNAV_ERR_ARG,
                                 "unknown preset '%s' (known: paper-pair, paper-trajectory, point, survey)",
