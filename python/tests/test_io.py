@@ -3,6 +3,8 @@ and write / read round trips (exact)."""
 
 import math
 
+import pytest
+
 import h5py
 import numpy as np
 
@@ -165,3 +167,12 @@ def test_read_cli_image(tmp_path, run_cli, point_run):
     assert mine.grid == img.grid
     assert np.allclose(mine.data, img.data, rtol=0, atol=1e-5 * np.abs(img.data).max())
     assert math.isclose(np.abs(mine.data).max(), np.abs(img.data).max(), rel_tol=1e-5)
+    # FFBP: as the CLI's --ffbp (the same tiles: bit for bit), and within
+    # -35 dB of the direct image (its interpolation error, docs/survey.md)
+    run_cli("image", tmp_path / "pt.h5", "--ffbp", "--grid", "-0.1,0.1,41,9.9,10.1,41", "-o", tmp_path / "f.h5")
+    fast = sasnav.image(point_run, (-0.1, 0.1, 41, 9.9, 10.1, 41), ffbp=True)
+    assert np.array_equal(fast.data, sasnav.read_image(tmp_path / "f.h5").data)
+    err = np.linalg.norm(fast.data - mine.data) / np.linalg.norm(mine.data)
+    assert 20 * np.log10(err) < -35
+    with pytest.raises(sasnav.Error):
+        sasnav.image(point_run, (-0.1, 0.1, 41, 9.9, 10.1, 41), ffbp=True, ffbp_oversampling=1.0)

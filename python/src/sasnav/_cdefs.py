@@ -124,6 +124,11 @@ class GridC(Structure):  # image.h
     ]
 
 
+class FfbpOpts(Structure):  # image.h
+    _c_name_ = "sasnav_ffbp_opts"
+    _fields_ = [("oversampling", c_double)]
+
+
 class OpOpts(Structure):  # op.h
     _c_name_ = "sasnav_op_opts"
     _fields_ = [
@@ -435,7 +440,7 @@ class NavigationC(Structure):  # navigate.h: struct sasnav_navigation
 
 # Every mirrored struct (checked by tests/test_layout.py).
 STRUCTS = [
-    Pose, PingPose, SensorArrayC, SystemC, Window, AidingC, PingSourceC, RunC, GridC, OpOpts,
+    Pose, PingPose, SensorArrayC, SystemC, Window, AidingC, PingSourceC, RunC, GridC, OpOpts, FfbpOpts,
     CglsOpts, SceneC, RippleParams, TrajectoryParams, AidingParams, ScenarioC,
     PairOpts, PairCandidate, PairResult, DpcaOpts, NavigateProgress,
     NavigateOpts, NavigatePair, NavigationC,
@@ -518,6 +523,8 @@ PROTOTYPES = {
     "sasnav_grid_check": (_i, [_P(GridC)]),
     "sasnav_grid_points": (_v, [_P(GridC), Pose, _P(_d), _P(_d)]),
     "sasnav_backproject": (_i, [_P(RunC), _P(PingPose), _P(GridC), _P(OpOpts), cfloat_p]),
+    "sasnav_ffbp_tile": (_i, [_P(RunC), _P(PingPose), _P(GridC), c_int, c_int, c_int, c_int, _P(OpOpts),
+                              _P(FfbpOpts), cfloat_p, c_void_p, c_void_p]),
     "sasnav_op_default_opts": (_v, [_P(OpOpts)]),
     "sasnav_op_create": (_i, [_P(SystemC), _P(SensorArrayC), _P(Window), _i, _P(_d), _P(_d),
                               _P(OpOpts), _P(c_void_p)]),
