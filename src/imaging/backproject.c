@@ -76,12 +76,7 @@ static int backproject_one(const sasnav_run *run, const sasnav_ping_pose *nav,
     /* The same coordinates as sasnav_grid_points gives the whole grid (the
      * pixel's own indices), so a pixel's value does not depend on the
      * tiling. */
-    for (int iy = r0; iy < r1; iy++)
-        for (int ix = c0; ix < c1; ix++) {
-            size_t n = (size_t)(iy - r0) * (size_t)w + (size_t)(ix - c0);
-            x[n] = grid->x0 + ix * grid->dx;
-            y[n] = grid->y0 + iy * grid->dy;
-        }
+    sasnav_bp_tile_points(grid, c0, r0, w, h, x, y);
     double xa = grid->x0 + c0 * grid->dx, xb = grid->x0 + (c1 - 1) * grid->dx;
     double ya = grid->y0 + r0 * grid->dy, yb = grid->y0 + (r1 - 1) * grid->dy;
     sasnav_op *op = NULL;
@@ -112,6 +107,30 @@ static int backproject_one(const sasnav_run *run, const sasnav_ping_pose *nav,
     return rc;
 }
 
+int sasnav_bp_check_args(const sasnav_run *run, const sasnav_ping_pose *nav, const sasnav_grid *grid,
+                         int col0, int col1, int row0, int row1, const sasnav_cfloat *image)
+{
+    if (!run || !nav || !grid || !image)
+        return sasnav_set_error(SASNAV_ERR_ARG, "NULL backprojection argument");
+    int rc = sasnav_grid_check(grid);
+    if (rc) return rc;
+    if (row0 < 0 || row1 > grid->ny || row0 >= row1 || col0 < 0 || col1 > grid->nx || col0 >= col1)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "pixels %d..%d x %d..%d are not within the grid's %d x %d", col0,
+                                col1 - 1, row0, row1 - 1, grid->nx, grid->ny);
+    return SASNAV_OK;
+}
+
+void sasnav_bp_tile_points(const sasnav_grid *grid, int c0, int r0, int w, int h, double *x, double *y)
+{
+    for (int iy = 0; iy < h; iy++)
+        for (int ix = 0; ix < w; ix++) {
+            size_t n = (size_t)iy * (size_t)w + (size_t)ix;
+            x[n] = grid->x0 + (c0 + ix) * grid->dx;
+            y[n] = grid->y0 + (r0 + iy) * grid->dy;
+        }
+}
+
 void sasnav_bp_tile_size_pairs(const sasnav_run *run, long pairs, int cols, int rows, int *tw, int *th)
 {
     int side = (int)floor(sqrt((double)pairs / run->array.n_rx));
@@ -133,14 +152,8 @@ int sasnav_backproject_tile(const sasnav_run *run, const sasnav_ping_pose *nav,
                             const sasnav_op_opts *opts, sasnav_cfloat *image,
                             sasnav_ping_progress_fn progress, void *user)
 {
-    if (!run || !nav || !grid || !image)
-        return sasnav_set_error(SASNAV_ERR_ARG, "NULL backprojection argument");
-    int rc = sasnav_grid_check(grid);
+    int rc = sasnav_bp_check_args(run, nav, grid, col0, col1, row0, row1, image);
     if (rc) return rc;
-    if (row0 < 0 || row1 > grid->ny || row0 >= row1 || col0 < 0 || col1 > grid->nx || col0 >= col1)
-        return sasnav_set_error(SASNAV_ERR_ARG,
-                                "pixels %d..%d x %d..%d are not within the grid's %d x %d", col0,
-                                col1 - 1, row0, row1 - 1, grid->nx, grid->ny);
     /* Square tiles of at most SASNAV_BACKPROJECT_TILE_PAIRS (pixel,
      * channel) pairs: the operator's memory is per pair. */
     int tw, th;

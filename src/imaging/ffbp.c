@@ -456,12 +456,7 @@ static int direct(ffbp_ctx *cx, int a, int b)
             free(y);
             return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for a tile of %zu pixels", np);
         }
-        for (int iy = 0; iy < cx->h; iy++)
-            for (int ix = 0; ix < cx->w; ix++) {
-                size_t n = (size_t)iy * (size_t)cx->w + (size_t)ix;
-                x[n] = cx->grid->x0 + (cx->c0 + ix) * cx->grid->dx;
-                y[n] = cx->grid->y0 + (cx->r0 + iy) * cx->grid->dy;
-            }
+        sasnav_bp_tile_points(cx->grid, cx->c0, cx->r0, cx->w, cx->h, x, y);
         int rc = sasnav_op_create(&cx->run->sys, &cx->run->array, &cx->run->win, (int)np, x, y, cx->oo,
                                   &cx->tile_op);
         free(x);
@@ -539,14 +534,8 @@ int sasnav_ffbp_tile(const sasnav_run *run, const sasnav_ping_pose *nav, const s
                      const sasnav_ffbp_opts *fopts, sasnav_cfloat *image,
                      sasnav_ping_progress_fn progress, void *user)
 {
-    if (!run || !nav || !grid || !image)
-        return sasnav_set_error(SASNAV_ERR_ARG, "NULL backprojection argument");
-    int rc = sasnav_grid_check(grid);
+    int rc = sasnav_bp_check_args(run, nav, grid, col0, col1, row0, row1, image);
     if (rc) return rc;
-    if (row0 < 0 || row1 > grid->ny || row0 >= row1 || col0 < 0 || col1 > grid->nx || col0 >= col1)
-        return sasnav_set_error(SASNAV_ERR_ARG,
-                                "pixels %d..%d x %d..%d are not within the grid's %d x %d", col0,
-                                col1 - 1, row0, row1 - 1, grid->nx, grid->ny);
     sasnav_ffbp_opts fo;
     sasnav_ffbp_default_opts(&fo);
     if (fopts) fo = *fopts;
