@@ -40,11 +40,12 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   placed off any image grid, with the true sensor poses, and writes them with
   the nominal and true navigation (docs/format.md).
   
-    --preset NAME    paper-pair | paper-trajectory | point (default
-                     paper-trajectory), or tank: the tank experiment as the
-                     recordings a user would have (multichannel passband WAV
-                     per ping, chirp, positions; 'sasnav tank --help'),
-                     written into the directory -o DIR
+    --preset NAME    paper-pair | paper-trajectory | point | survey (default
+                     paper-trajectory; survey: a 300 kHz survey SAS over a
+                     100 m varied seabed, docs/config.md), or tank: the
+                     tank experiment as the recordings a user would have
+                     (multichannel passband WAV per ping, chirp, positions;
+                     'sasnav tank --help'), written into the directory -o DIR
     --config FILE    YAML scenario overriding the preset (docs/config.md)
     --seed N         seed of the scene, trajectory and noise draws
     --snr DB         signal-to-noise ratio in dB ('inf' = noise-free)
@@ -64,7 +65,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   $ sasnav image --help
   usage: sasnav image run.h5 [--nav nav.h5 | --truth] [--grid X0,X1,NX,Y0,Y1,NY]
                       [--png image.png] [--dynamic-range DB] [--threads N]
-                      [--ping P [--cgls K] [--tikhonov L]] -o image.h5
+                      [--ping P [--cgls K] [--tikhonov L]]
+                      [--ffbp [--ffbp-oversampling S]] -o image.h5
   
   Backprojects every ping of the run (sum of adjoint ping operators) on a
   grid and writes the complex image (docs/format.md) and optionally a PNG in dB.
@@ -81,6 +83,11 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --cgls K          with --ping: the regularised pseudo-inverse of the ping
                       by K CGLS iterations instead of its backprojection
     --tikhonov L      Tikhonov weight of the CGLS inverse (default 0)
+    --ffbp            fast factorised backprojection: subapertures on polar
+                      grids merged two by two (faster on long apertures; the
+                      error against direct backprojection: docs/survey.md)
+    --ffbp-oversampling S  polar grids' sampling over Nyquist (default 2;
+                      1.25..4: higher is more exact and slower)
     -o FILE           output image file (HDF5)
   
   Any grid size: the backprojection runs in tiles of rows (about 180 MB of
