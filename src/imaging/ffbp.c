@@ -7,7 +7,9 @@
  * (horizontal) and direction cosine u = along / rho on the imaged side.
  * Its image f (the sum of its pings' adjoints) is stored demodulated,
  *   g(rho, u) = f exp(-j k sqrt(rho^2 + h^2)),  k = 4 pi f0 / c,
- * which is band-limited: along rho by the pulse (|k_rho| <= 2 pi B / c), and
+ * which is band-limited: along rho by the pulse (|k_rho| <= 2 pi B / c)
+ * widened by the drift of the residual delay with range (the sensors'
+ * offsets squared over 2 rho^2: a long subaperture at short range), and
  * along u by the spread of the subaperture's sensors about its origin
  * (spatial frequencies (f0 + f) s / c for along-track sensor-offset sums s):
  * a short subaperture needs few samples in u, a long one many, over the
@@ -301,7 +303,7 @@ static int node_geometry(const ffbp_ctx *cx, int a, int b, const polar *parent, 
      * order), across sums v (through sqrt(1 - u^2)), and the second-order
      * term (|t|^2 + |r|^2) / (2 rho), whose u-derivative is at most
      * (|t|^2 + |r|^2) / rho. */
-    double seff = 0;
+    double seff = 0, sr = 0;
     for (int i = a; i < b; i++) {
         double tx, ty, rx, ry, th;
         item_sensors(cx, i, &tx, &ty, &rx, &ry, &th);
@@ -312,13 +314,20 @@ static int node_geometry(const ffbp_ctx *cx, int a, int b, const polar *parent, 
         double e = fabs(tu + ru) + fabs(tv + rv) * uabs / sqrt(1 - uabs * uabs) +
                    (tu * tu + tv * tv + ru * ru + rv * rv) / rmin;
         if (e > seff) seff = e;
+        /* Along rho the residual delay changes as 1 - cos of the angles
+         * between the sensors' rays and the centre's: at most
+         * (|t|^2 + |r|^2) / (2 rho^2) (times c), with the heights' part. */
+        double hh = run->array.tx_height * run->array.tx_height + run->array.rx_height * run->array.rx_height;
+        double er = (tu * tu + tv * tv + ru * ru + rv * rv + hh) / (2 * rmin * rmin);
+        if (er > sr) sr = er;
     }
     /* The beam patterns (sinc of D u / lambda for each aperture D) widen
      * the spectrum by (D_t + D_r) / lambda. */
     if (run->sys.beam_pattern) seff += 0.5 * (run->array.tx_length + run->array.rx_length);
     double c = run->sys.sound_speed, fmax_hz = run->sys.f0 + 0.5 * run->sys.bandwidth;
     double wu = 2.0 * fmax_hz / c * seff;
-    g->drho = c / (2.0 * run->sys.bandwidth * cx->os);
+    /* rho: the pulse's band (2B / c) widened by the residual's drift. */
+    g->drho = 1.0 / ((2.0 * run->sys.bandwidth / c + 2.0 * fmax_hz / c * sr) * cx->os);
     /* At least 4 intervals over the region (envelope). */
     double du_max = (umax - umin) / 4 + 1e-9;
     g->du = wu > 0 ? 1.0 / (wu * cx->os) : du_max;
