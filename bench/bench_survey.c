@@ -253,36 +253,26 @@ int main(int argc, char **argv)
         printf("simulate of the 48-ping run failed (%s)\n", log);
         return 1;
     }
-    for (int j = 0; j < nr; j++) {
-        if (ranks[j] > 1 && !mpi) continue;
-        snprintf(out2, sizeof out2, "%s/img-r%ld.h5", dir, ranks[j]);
-        char *rest[] = {"image", runf, "--grid", "-1.6,1.6,1025,9.2,10.8,513", "-o", out2, NULL};
-        command(argvs, (int)ranks[j], sasnav, rest);
-        run_stats s = run(argvs, log);
-        if (j == 0) snprintf(first, sizeof first, "%s", out2);
-        double updates = 1025.0 * 513 * 48 * 16;
-        printf("image 1025 x 513 px, 48 pings x 16 channels: %ld process%s %6.2f s  %6.3f G updates/s  "
-               "peak %6.1f MiB  %s%s\n",
-               ranks[j], ranks[j] > 1 ? "es" : "  ", s.seconds, updates / s.seconds * 1e-9, s.peak_mib,
-               j == 0 ? "" : same_files(first, out2) ? "same as 1" : "DIFFERS", s.status ? "  FAILED" : "");
-    }
-    /* The same by FFBP: its tiles are 1024 x 1024 at 16 channels (2^24
+    /* Direct, then FFBP: its tiles are 1024 x 1024 at 16 channels (2^24
      * pairs), so this grid is a 1024-column tile and a 1-column one: a
-     * second rank gains little here (FFBP keeps one process's tiles, for
+     * second rank gains little there (FFBP keeps one process's tiles, for
      * the same bits); larger grids spread. */
-    for (int j = 0; j < nr; j++) {
-        if (ranks[j] > 1 && !mpi) continue;
-        snprintf(out2, sizeof out2, "%s/ffbp-r%ld.h5", dir, ranks[j]);
-        char *rest[] = {"image", runf, "--ffbp", "--grid", "-1.6,1.6,1025,9.2,10.8,513", "-o", out2, NULL};
-        command(argvs, (int)ranks[j], sasnav, rest);
-        run_stats s = run(argvs, log);
-        if (j == 0) snprintf(first, sizeof first, "%s", out2);
-        double updates = 1025.0 * 513 * 48 * 16;
-        printf("image --ffbp, the same grid and run: %ld process%s %6.2f s  %6.3f G equivalent updates/s  "
-               "peak %6.1f MiB  %s%s\n",
-               ranks[j], ranks[j] > 1 ? "es" : "  ", s.seconds, updates / s.seconds * 1e-9, s.peak_mib,
-               j == 0 ? "" : same_files(first, out2) ? "same as 1" : "DIFFERS", s.status ? "  FAILED" : "");
-    }
+    for (int ffbp = 0; ffbp < 2; ffbp++)
+        for (int j = 0; j < nr; j++) {
+            if (ranks[j] > 1 && !mpi) continue;
+            snprintf(out2, sizeof out2, "%s/%s-r%ld.h5", dir, ffbp ? "ffbp" : "img", ranks[j]);
+            char *rest[] = {"image", runf, "--grid", "-1.6,1.6,1025,9.2,10.8,513", "-o", out2,
+                            ffbp ? "--ffbp" : NULL, NULL};
+            command(argvs, (int)ranks[j], sasnav, rest);
+            run_stats s = run(argvs, log);
+            if (j == 0) snprintf(first, sizeof first, "%s", out2);
+            double updates = 1025.0 * 513 * 48 * 16;
+            printf("image%s 1025 x 513 px, 48 pings x 16 channels: %ld process%s %6.2f s  %6.3f G %supdates/s  "
+                   "peak %6.1f MiB  %s%s\n",
+                   ffbp ? " --ffbp" : "", ranks[j], ranks[j] > 1 ? "es" : "  ", s.seconds,
+                   updates / s.seconds * 1e-9, ffbp ? "equivalent " : "", s.peak_mib,
+                   j == 0 ? "" : same_files(first, out2) ? "same as 1" : "DIFFERS", s.status ? "  FAILED" : "");
+        }
     printf("\n(scratch files kept in %s)\n", dir);
     return 0;
 }

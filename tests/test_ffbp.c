@@ -75,6 +75,21 @@ static double rel_error_db(const sasnav_cfloat *ref, const sasnav_cfloat *x, siz
     return 10 * log10(e / r);
 }
 
+/* Direct backprojection (the reference) and FFBP of `run` with `nav` on
+ * the whole grid, one thread each: *d and *f (free both). */
+static void direct_and_ffbp(const sasnav_run *run, const sasnav_ping_pose *nav, const sasnav_grid *g,
+                            sasnav_cfloat **d, sasnav_cfloat **f)
+{
+    size_t n = (size_t)g->nx * g->ny;
+    *d = malloc(sizeof **d * n);
+    *f = malloc(sizeof **f * n);
+    sasnav_op_opts oo;
+    sasnav_op_default_opts(&oo);
+    oo.nthreads = 1;
+    CHECK_OK(sasnav_backproject_tile(run, nav, g, 0, g->nx, 0, g->ny, &oo, *d, NULL, NULL));
+    CHECK_OK(sasnav_ffbp_tile(run, nav, g, 0, g->nx, 0, g->ny, &oo, NULL, *f, NULL, NULL));
+}
+
 static void test_points(const sasnav_run *run)
 {
     sasnav_grid g;
@@ -86,12 +101,8 @@ static void test_points(const sasnav_run *run)
     CHECK_OK(sasnav_grid_make(-0.75, 0.75, 301, 9.5, 10.5, 201, &g));
 #endif
     size_t n = (size_t)g.nx * g.ny;
-    sasnav_cfloat *d = malloc(sizeof *d * n), *f = malloc(sizeof *f * n), *f2 = malloc(sizeof *f2 * n);
-    sasnav_op_opts oo;
-    sasnav_op_default_opts(&oo);
-    oo.nthreads = 1;
-    CHECK_OK(sasnav_backproject_tile(run, run->truth, &g, 0, g.nx, 0, g.ny, &oo, d, NULL, NULL));
-    CHECK_OK(sasnav_ffbp_tile(run, run->truth, &g, 0, g.nx, 0, g.ny, &oo, NULL, f, NULL, NULL));
+    sasnav_cfloat *d, *f, *f2 = malloc(sizeof *f2 * n);
+    direct_and_ffbp(run, run->truth, &g, &d, &f);
     /* The interpolations' error: -52 dB each (6-tap Kaiser-sinc at 2x
      * oversampling), summed over the tree's levels; measured about -50 dB
      * here. -35 dB leaves room for float rounding and other scenes, and
@@ -123,6 +134,8 @@ static void test_points(const sasnav_run *run)
     }
 #ifndef SASNAV_TEST_SANITIZED
     /* The same bits with two threads (fixed-order sums). */
+    sasnav_op_opts oo;
+    sasnav_op_default_opts(&oo);
     oo.nthreads = 2;
     CHECK_OK(sasnav_ffbp_tile(run, run->truth, &g, 0, g.nx, 0, g.ny, &oo, NULL, f2, NULL, NULL));
     CHECK(!memcmp(f, f2, sizeof *f * n), "FFBP differs between 1 and 2 threads");
@@ -156,12 +169,8 @@ static void test_speckle(void)
     CHECK_OK(sasnav_grid_make(-1.6, 1.6, 1025, 9.2, 10.8, 513, &g));
 #endif
     size_t n = (size_t)g.nx * g.ny;
-    sasnav_cfloat *d = malloc(sizeof *d * n), *f = malloc(sizeof *f * n);
-    sasnav_op_opts oo;
-    sasnav_op_default_opts(&oo);
-    oo.nthreads = 1;
-    CHECK_OK(sasnav_backproject_tile(run, run->nav, &g, 0, g.nx, 0, g.ny, &oo, d, NULL, NULL));
-    CHECK_OK(sasnav_ffbp_tile(run, run->nav, &g, 0, g.nx, 0, g.ny, &oo, NULL, f, NULL, NULL));
+    sasnav_cfloat *d, *f;
+    direct_and_ffbp(run, run->nav, &g, &d, &f);
     double err = rel_error_db(d, f, n);
     CHECK(err < -35.0, "FFBP error on speckle %.1f dB (want < -35)", err);
     if (getenv("SASNAV_TEST_VERBOSE")) fprintf(stderr, "speckle: %.1f dB\n", err);
@@ -177,14 +186,12 @@ static void test_fallback(const sasnav_run *run)
     sasnav_grid g;
     CHECK_OK(sasnav_grid_make(-0.3013, 0.3013, 41, -0.4007, 0.4007, 33, &g));
     size_t n = (size_t)g.nx * g.ny;
-    sasnav_cfloat *d = malloc(sizeof *d * n), *f = malloc(sizeof *f * n);
-    sasnav_op_opts oo;
-    sasnav_op_default_opts(&oo);
-    oo.nthreads = 1;
+    sasnav_cfloat *d, *f;
     sasnav_run r = *run;
     r.array.rx_height = r.array.tx_height = 1.0; /* no pixel on a sensor */
-    CHECK_OK(sasnav_backproject_tile(&r, r.truth, &g, 0, g.nx, 0, g.ny, &oo, d, NULL, NULL));
-    CHECK_OK(sasnav_ffbp_tile(&r, r.truth, &g, 0, g.nx, 0, g.ny, &oo, NULL, f, NULL, NULL));
+    direct_and_ffbp(&r, r.truth, &g, &d, &f);
+    sasnav_op_opts oo;
+    sasnav_op_default_opts(&oo);
     CHECK(!memcmp(d, f, sizeof *d * n), "the fallback is the direct operator");
     sasnav_ffbp_opts fo;
     sasnav_ffbp_default_opts(&fo);

@@ -383,11 +383,13 @@ static int item_ping(ffbp_ctx *cx, int i, const sasnav_cfloat **samples)
 
 /* The demodulated polar image of pings [a, b) over the tile widened by
  * `margin`: *g and *out (allocated; free with free()). */
-static int build_polar(ffbp_ctx *cx, int a, int b, const polar *parent, polar *g, sasnav_cfloat **out)
+static int build_polar(ffbp_ctx *cx, int a, int b, const polar *parent, polar *g, sasnav_cfloat **out);
+
+/* The demodulated polar image of items [a, b) on the grid g (node_geometry's). */
+static int fill_polar(ffbp_ctx *cx, int a, int b, const polar *g, sasnav_cfloat **out)
 {
     *out = NULL;
-    int rc = node_geometry(cx, a, b, parent, g);
-    if (rc) return rc;
+    int rc = 0;
     size_t n = (size_t)g->nrho * (size_t)g->nu;
     sasnav_cfloat *v = calloc(n, sizeof *v);
     if (!v) return sasnav_set_error(SASNAV_ERR_NOMEM, "FFBP: out of memory for a %d x %d polar image", g->nrho, g->nu);
@@ -465,6 +467,13 @@ static int build_polar(ffbp_ctx *cx, int a, int b, const polar *parent, polar *g
     return 0;
 }
 
+static int build_polar(ffbp_ctx *cx, int a, int b, const polar *parent, polar *g, sasnav_cfloat **out)
+{
+    *out = NULL;
+    int rc = node_geometry(cx, a, b, parent, g);
+    return rc ? rc : fill_polar(cx, a, b, g, out);
+}
+
 /* Items [a, b) by the direct operator on the tile's pixels (a ping's
  * other channels given zeros). */
 static int direct(ffbp_ctx *cx, int a, int b)
@@ -506,29 +515,32 @@ static int direct(ffbp_ctx *cx, int a, int b)
 
 /* Adds pings [a, b) to the tile: through the largest polar images smaller
  * than the tile, or directly. */
+static int accumulate(ffbp_ctx *cx, int a, int b);
+
+/* Items [a, b) in two halves, or a single ping by the direct operator. */
+static int accumulate_split(ffbp_ctx *cx, int a, int b)
+{
+    if (b - a <= cx->nrx) return direct(cx, a, b);
+    int mid = split(cx, a, b);
+    int rc = accumulate(cx, a, mid);
+    return rc ? rc : accumulate(cx, mid, b);
+}
+
 static int accumulate(ffbp_ctx *cx, int a, int b)
 {
     size_t npix = (size_t)cx->w * (size_t)cx->h;
     polar g;
     int rc = node_geometry(cx, a, b, NULL, &g);
     if (rc && rc != UNSUITED) return rc;
-    if (rc == UNSUITED || (double)g.nrho * g.nu > (double)npix) {
-        if (b - a <= cx->nrx) return direct(cx, a, b);
-        int mid = split(cx, a, b);
-        rc = accumulate(cx, a, mid);
-        return rc ? rc : accumulate(cx, mid, b);
-    }
+    if (rc == UNSUITED || (double)g.nrho * g.nu > (double)npix) return accumulate_split(cx, a, b);
     sasnav_cfloat *v = NULL;
     long step0 = *cx->step;
-    rc = build_polar(cx, a, b, NULL, &g, &v);
+    rc = fill_polar(cx, a, b, &g, &v);
     if (rc == UNSUITED) {
         /* A level below did not suit: redo these pings split (the steps
          * already counted are counted again). */
         *cx->step = step0;
-        if (b - a <= cx->nrx) return direct(cx, a, b);
-        int mid = split(cx, a, b);
-        rc = accumulate(cx, a, mid);
-        return rc ? rc : accumulate(cx, mid, b);
+        return accumulate_split(cx, a, b);
     }
     if (rc) return rc;
 #pragma omp parallel for num_threads(cx->nthreads) schedule(static)
