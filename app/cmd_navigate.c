@@ -174,7 +174,9 @@ static void print_json(const char *input, const sasnav_navigation *nav)
     }
     json_t *pairs = json_array();
     for (int j = 0; j < nav->n_pairs; j++) {
-        const sasnav_navigate_pair *np = &nav->pairs[j];
+        sasnav_navigate_pair pair;
+        sasnav_navigation_pair(nav, j, &pair);
+        const sasnav_navigate_pair *np = &pair;
         json_t *o = json_object();
         json_object_set_new(o, "p", json_integer(np->p));
         json_object_set_new(o, "q", json_integer(np->q));
@@ -226,7 +228,9 @@ static void print_text(const sasnav_navigation *nav)
     if (nav->has_truth) printf(" %10s %10s %12s", "err mm", "err mm", "err rad");
     printf("  %7s  %-10s %s\n", "s", "status", "resolution");
     for (int j = 0; j < nav->n_pairs; j++) {
-        const sasnav_navigate_pair *np = &nav->pairs[j];
+        sasnav_navigate_pair pair;
+        sasnav_navigation_pair(nav, j, &pair);
+        const sasnav_navigate_pair *np = &pair;
         char name[32];
         snprintf(name, sizeof name, "%d-%d", np->p, np->q);
         printf("%-8s %+10.3f %+10.4f %+12.4e", name, 1e3 * np->fused.x, 1e3 * np->fused.y,
@@ -274,6 +278,7 @@ int cmd_navigate(int argc, char **argv)
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
     sasnav_navigate_default_opts(&no);
+    no.compact_pairs = 1; /* long runs: the pairs stay packed (docs/survey.md) */
     const char *output = NULL, *checkpoint = NULL;
     long threads = 0, k = no.pair.k, iters = no.pair.i;
     int json = 0, opt, anchor_truth = 0, have_first = 0;
@@ -457,7 +462,9 @@ int cmd_navigate(int argc, char **argv)
     cli_checkpoint_end(&ck, 1);
     int n_unchecked = 0;
     for (int j = 0; j < nav.n_pairs; j++) {
-        const sasnav_navigate_pair *np = &nav.pairs[j];
+        sasnav_navigate_pair pair;
+        sasnav_navigation_pair(&nav, j, &pair);
+        const sasnav_navigate_pair *np = &pair;
         if (np->verdict == SASNAV_VERDICT_UNCHECKED && np->resolution == SASNAV_RESOLVED_NONE)
             n_unchecked++; /* one line for them all, below */
         else if (flagged(np))

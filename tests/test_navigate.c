@@ -556,6 +556,31 @@ static void test_trust_point(void)
                                  nav.pairs[j].resolution == SASNAV_RESOLVED_BRIDGED;
             CHECK(nav.n_resolved >= 1 && ok_or_bridged, "with aiding: %d resolved, %d flagged",
                   nav.n_resolved, nav.n_flagged);
+            /* The same navigation with its pairs kept packed
+             * (compact_pairs; first estimates reused, the resolution's
+             * re-estimates made again): the same pairs and trajectory. */
+            sasnav_navigate_opts oc = o;
+            oc.compact_pairs = 1;
+            oc.reuse = &nav;
+            sasnav_navigation cn;
+            CHECK_OK(sasnav_navigate(run, &oc, &cn));
+            CHECK(cn.pairs == NULL && cn.packed != NULL && cn.n_pairs == nav.n_pairs, "compact: pairs %p, %d",
+                  (void *)cn.pairs, cn.n_pairs);
+            for (int j = 0; j < cn.n_pairs && j < nav.n_pairs; j++) {
+                sasnav_navigate_pair c;
+                CHECK_OK(sasnav_navigation_pair(&cn, j, &c));
+                const sasnav_navigate_pair *f = &nav.pairs[j];
+                CHECK(c.p == f->p && c.q == f->q && c.status == f->status && c.verdict == f->verdict &&
+                          c.first_verdict == f->first_verdict && c.resolution == f->resolution &&
+                          !memcmp(&c.fused, &f->fused, sizeof c.fused) &&
+                          !memcmp(&c.result.error, &f->result.error, sizeof c.result.error) &&
+                          !memcmp(&c.first_result.error, &f->first_result.error, sizeof c.result.error) &&
+                          c.result.eta == f->result.eta && c.result.n_candidates == f->result.n_candidates,
+                      "compact pair %d differs", j);
+            }
+            CHECK(cn.centroids && !memcmp(cn.centroids, nav.centroids, sizeof *cn.centroids * (size_t)cn.n_pings),
+                  "compact: other centroids");
+            sasnav_navigation_free(&cn);
         } else {
             CHECK(nav.n_flagged >= 1, "without aiding nothing flagged");
         }

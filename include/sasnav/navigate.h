@@ -198,6 +198,11 @@ typedef struct {
                                  is estimated (same options). Keys absent
                                  from the run are ignored. Default NULL */
     int n_done;               /* entries of done */
+    int compact_pairs;        /* 1: the pairs stay packed in the navigation
+                                 (`pairs` is NULL; read them one at a time
+                                 with sasnav_navigation_pair): about a third
+                                 of the memory of `pairs` on long runs
+                                 (docs/survey.md). 0 (default): `pairs` */
     sasnav_progress_fn progress; /* may be NULL */
     void *progress_user;      /* passed to progress */
 } sasnav_navigate_opts;
@@ -239,7 +244,8 @@ struct sasnav_navigation {
     int n_pairs;                  /* entries of pairs[]: the n_pings - 1
                                      consecutive pairs first, then the long
                                      baselines (p, p + 2) that were estimated */
-    sasnav_navigate_pair *pairs;
+    sasnav_navigate_pair *pairs;  /* NULL with opts.compact_pairs: use
+                                     sasnav_navigation_pair */
     int n_failed;                 /* pairs whose estimate failed (nominal used) */
     int n_flagged;                /* pairs whose final verdict is not "ok" or
                                      that were bridged */
@@ -276,7 +282,14 @@ struct sasnav_navigation {
     double pairs_per_second;      /* n_pairs / seconds_estimation */
     int threads_over_pairs;       /* pairs estimated concurrently (1: one
                                      after the other) */
+    void *packed;                 /* internal: the packed pairs
+                                     (opts.compact_pairs), or NULL */
 };
+
+/* Pair j (0 <= j < n_pairs) of `nav`, whether its pairs are packed
+ * (opts.compact_pairs) or not: copied into *np. Returns SASNAV_OK or
+ * SASNAV_ERR_ARG (NULL argument, j out of range, no pairs). */
+int sasnav_navigation_pair(const sasnav_navigation *nav, int j, sasnav_navigate_pair *np);
 
 /* Navigates `run` (at least 2 pings, validated with sasnav_run_check).
  * `opts` may be NULL (defaults). `out` is overwritten (not freed first).

@@ -56,7 +56,10 @@ static void close_id(hid_t *id, herr_t (*closer)(hid_t))
  * (H5dont_atexit fails harmlessly when another user of the library in the
  * process called HDF5 first). */
 static pthread_once_t atexit_once = PTHREAD_ONCE_INIT;
-static void no_atexit(void) { (void)H5dont_atexit(); }
+static void no_atexit(void)
+{
+    (void)H5dont_atexit();
+}
 
 void h5_begin(h5_ctx *c, const char *path)
 {
@@ -176,6 +179,23 @@ static hid_t file_access_plist(int for_writing)
          * netCDF-4 tools) and with checksummed superblock and object
          * headers, so that most metadata corruption is detected. */
         H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_V18);
+    } else {
+        /* A small metadata cache. Its size counts the entries' size on
+         * disk; a chunk-index node of a run's /raw takes ~5x that in
+         * memory (17 kB for 3.4 kB), so the default 2 MB cache held ~6 MB
+         * of index nodes once the open-time storage check had visited
+         * them all (a 20,000-ping run; docs/survey.md). 256 kB still holds
+         * the root and the path to any ping (~80 entries). */
+        H5AC_cache_config_t mdc;
+        memset(&mdc, 0, sizeof mdc);
+        mdc.version = H5AC__CURR_CACHE_CONFIG_VERSION;
+        if (H5Pget_mdc_config(fapl, &mdc) >= 0) {
+            mdc.set_initial_size = 1;
+            mdc.initial_size = 1 << 18;
+            mdc.max_size = 1 << 18;
+            mdc.min_size = 1 << 16;
+            H5Pset_mdc_config(fapl, &mdc);
+        }
     }
     return fapl;
 }

@@ -15,35 +15,29 @@ static void set_comp(sasnav_pose *p, int k, double v)
     else p->theta = v;
 }
 
-void fuse_aiding_errors(const sasnav_run *run, const sasnav_navigate_pair *pairs, int n,
-                        sasnav_pose *a, sasnav_pose *sa)
+void fuse_aiding_error(const sasnav_run *run, int p, int q, sasnav_pose nom, double est_yaw,
+                       sasnav_pose *a, sasnav_pose *sa)
 {
     const sasnav_aiding *ad = run->aiding;
-    for (int j = 0; j < n; j++) {
-        a[j] = (sasnav_pose){0, 0, 0};
-        sa[j] = (sasnav_pose){INFINITY, INFINITY, INFINITY};
-        if (!ad) continue;
-        int q = pairs[j].q, p = pairs[j].p;
-        if (q != p + 1) continue;
-        double dt = ad->time[q] - ad->time[p];
-        sasnav_pose nom = pairs[j].nominal;
-        double dpsi = nom.theta + pairs[j].result.error.theta;
-        if (ad->yaw_rate) {
-            dpsi = ad->yaw_rate[q] * dt;
-            a[j].theta = dpsi - nom.theta;
-            sa[j].theta = ad->yaw_rate_sigma[q] * dt;
-        }
-        if (ad->velocity) {
-            /* The mean velocity is given in the frame at the interval's
-             * mean heading: rotate by half the interval's yaw into p's
-             * frame. */
-            double c = cos(0.5 * dpsi), s = sin(0.5 * dpsi);
-            double v0 = ad->velocity[2 * q], v1 = ad->velocity[2 * q + 1];
-            a[j].x = (c * v0 - s * v1) * dt - nom.x;
-            a[j].y = (s * v0 + c * v1) * dt - nom.y;
-            sa[j].x = ad->velocity_sigma[2 * q] * dt;
-            sa[j].y = ad->velocity_sigma[2 * q + 1] * dt;
-        }
+    *a = (sasnav_pose){0, 0, 0};
+    *sa = (sasnav_pose){INFINITY, INFINITY, INFINITY};
+    if (!ad || q != p + 1) return;
+    double dt = ad->time[q] - ad->time[p];
+    double dpsi = nom.theta + est_yaw;
+    if (ad->yaw_rate) {
+        dpsi = ad->yaw_rate[q] * dt;
+        a->theta = dpsi - nom.theta;
+        sa->theta = ad->yaw_rate_sigma[q] * dt;
+    }
+    if (ad->velocity) {
+        /* The mean velocity is given in the frame at the interval's mean
+         * heading: rotate by half the interval's yaw into p's frame. */
+        double c = cos(0.5 * dpsi), s = sin(0.5 * dpsi);
+        double v0 = ad->velocity[2 * q], v1 = ad->velocity[2 * q + 1];
+        a->x = (c * v0 - s * v1) * dt - nom.x;
+        a->y = (s * v0 + c * v1) * dt - nom.y;
+        sa->x = ad->velocity_sigma[2 * q] * dt;
+        sa->y = ad->velocity_sigma[2 * q + 1] * dt;
     }
 }
 

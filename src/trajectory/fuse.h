@@ -8,12 +8,13 @@
 
 #include "sasnav/navigate.h"
 
-/* The aiding measurement of each consecutive pair as a motion error, with
- * its standard deviations (+inf for a component without measurement: no
- * gyro, no DVL, or no aiding at all). `yaw_hint[j]` is the pair's yaw
- * motion error to rotate DVL velocities with when there is no gyro. */
-void fuse_aiding_errors(const sasnav_run *run, const sasnav_navigate_pair *pairs, int n,
-                        sasnav_pose *a, sasnav_pose *sa);
+/* The aiding measurement of pair (p, q) with nominal displacement `nom`
+ * as a motion error in *a, with its standard deviations in *sa (+inf for a
+ * component without measurement: no gyro, no DVL, no aiding at all, or q
+ * not p + 1). `est_yaw` is the pair's estimated yaw motion error, to
+ * rotate DVL velocities with when there is no gyro. */
+void fuse_aiding_error(const sasnav_run *run, int p, int q, sasnav_pose nom, double est_yaw,
+                       sasnav_pose *a, sasnav_pose *sa);
 
 /* One option of a pair in the joint choice. */
 typedef struct {

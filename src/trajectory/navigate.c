@@ -6,6 +6,7 @@
 #include "core/clock.h"
 #include "core/hash.h"
 #include "trajectory/fuse.h"
+#include "trajectory/pair_store.h"
 
 #include <math.h>
 #include <omp.h>
@@ -40,6 +41,10 @@ void sasnav_navigation_free(sasnav_navigation *nav)
 {
     if (!nav) return;
     free(nav->pairs);
+    if (nav->packed) {
+        pair_store_free(nav->packed);
+        free(nav->packed);
+    }
     free(nav->centroids);
     free(nav->nav);
     free(nav->truth_centroids);
@@ -47,6 +52,17 @@ void sasnav_navigation_free(sasnav_navigation *nav)
     free(nav->cumulative);
     free(nav->differential);
     memset(nav, 0, sizeof *nav);
+}
+
+int sasnav_navigation_pair(const sasnav_navigation *nav, int j, sasnav_navigate_pair *np)
+{
+    if (!nav || !np) return sasnav_set_error(SASNAV_ERR_ARG, "navigation pair: NULL argument");
+    if (j < 0 || j >= nav->n_pairs)
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigation pair %d does not exist (%d pairs)", j, nav->n_pairs);
+    if (nav->pairs) *np = nav->pairs[j];
+    else if (nav->packed) pair_store_get(nav->packed, j, np);
+    else return sasnav_set_error(SASNAV_ERR_ARG, "navigation pair: the navigation holds no pairs");
+    return SASNAV_OK;
 }
 
 static sasnav_pose pose_sub(sasnav_pose a, sasnav_pose b)
@@ -101,7 +117,12 @@ typedef struct {
                                  j % n_parts == part only (n_parts 1: all) */
     uint64_t *keys;           /* per output pair: its key (part mode), or NULL */
     sasnav_cfloat *bufs;      /* streamed runs: two pings per worker, or NULL */
+    pair_store pairs;         /* the pairs while the navigation runs, packed */
 } nav_ctx;
+
+/* Pair j, unpacked / packed again (pair_store.h). */
+static void get_pair(const nav_ctx *ctx, int j, sasnav_navigate_pair *np) { pair_store_get(&ctx->pairs, j, np); }
+static int put_pair(nav_ctx *ctx, int j, const sasnav_navigate_pair *np) { return pair_store_put(&ctx->pairs, j, np); }
 
 /* Pings p and q of the run: pointers into it (in-memory run) or read into
  * worker t's buffers (streamed run: only the pings in flight are held). */
@@ -225,7 +246,7 @@ static const sasnav_pair_record *find_record(const nav_ctx *ctx, uint64_t key)
 /* Estimates pair (p, q) into *np (or takes it from ctx->done: *resumed
  * = 1). Returns a fatal code, else SASNAV_OK with np->status telling how
  * the pair went. *key: the pair's content key. */
-static int estimate_pair(nav_ctx *ctx, int t, int p, int q, sasnav_navigate_pair *np,
+static int estimate_pair(nav_ctx *ctx, int t, int j, int p, int q, sasnav_navigate_pair *np,
                          uint64_t *key, int *resumed)
 {
     sasnav_pair *estimator = ctx->estimators ? ctx->estimators[t] : NULL;
@@ -255,13 +276,15 @@ static int estimate_pair(nav_ctx *ctx, int t, int p, int q, sasnav_navigate_pair
     }
     const sasnav_navigation *reuse = ctx->opts->reuse;
     if (reuse) {
-        /* The earlier estimate of the same pair. */
-        const sasnav_navigate_pair *old = NULL;
-        for (int j = 0; j < reuse->n_pairs && !old; j++)
-            if (reuse->pairs[j].p == p && reuse->pairs[j].q == q) old = &reuse->pairs[j];
-        if (!old) return sasnav_set_error(SASNAV_ERR_ARG, "navigate: the reused navigation has no pair %d-%d", p, q);
-        np->result = old->first_result;
-        np->status = old->first_status;
+        /* The earlier estimate of the same pair: at the same place in the
+         * output order when the runs are the same, else searched. */
+        sasnav_navigate_pair old;
+        int found = j < reuse->n_pairs && !sasnav_navigation_pair(reuse, j, &old) && old.p == p && old.q == q;
+        for (int i = 0; i < reuse->n_pairs && !found; i++)
+            found = !sasnav_navigation_pair(reuse, i, &old) && old.p == p && old.q == q;
+        if (!found) return sasnav_set_error(SASNAV_ERR_ARG, "navigate: the reused navigation has no pair %d-%d", p, q);
+        np->result = old.first_result;
+        np->status = old.first_status;
         np->first_result = np->result;
         np->first_status = np->status;
         if (run->truth) np->error = pose_sub(np->result.error, np->truth);
@@ -370,7 +393,7 @@ static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
     return SASNAV_OK;
 }
 
-/* Estimates all pairs into out->pairs (allocated). */
+/* Estimates all pairs into ctx->pairs (allocated). */
 static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
 {
     const sasnav_run *run = ctx->run;
@@ -390,20 +413,17 @@ static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
             out->n_skipped++;
         }
     }
-    out->pairs = calloc((size_t)total, sizeof *out->pairs);
-    if (!out->pairs) {
+    if (pair_store_init(&ctx->pairs, total)) {
         free(use_long);
-        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        return SASNAV_ERR_NOMEM;
     }
     /* The pairs in their output order: consecutive pairs, then the long
      * baselines. */
     int *pq = malloc(sizeof(int) * 2 * (size_t)total);
     int *codes = calloc((size_t)total, sizeof(int));
-    char (*messages)[256] = calloc((size_t)total, sizeof *messages);
-    if (!pq || !codes || !messages) {
+    if (!pq || !codes) {
         free(pq);
         free(codes);
-        free(messages);
         free(use_long);
         return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     }
@@ -423,7 +443,6 @@ static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
     if (!mine) {
         free(pq);
         free(codes);
-        free(messages);
         free(use_long);
         return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     }
@@ -436,8 +455,10 @@ static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
      * pair's result depends on its own data only (the operators sum in a
      * fixed order whatever their thread count), so the output is the same
      * bits whatever the number of threads. A fatal error stops the
-     * remaining pairs. */
-    int done = 0, stop = 0;
+     * remaining pairs; the message of the first in the output order is
+     * kept. */
+    int done = 0, stop = 0, first_failed = total;
+    char message[256] = "";
 #pragma omp parallel for schedule(dynamic, 1) num_threads(ctx->n_workers) if (ctx->n_workers > 1)
     for (int m = 0; m < n_mine; m++) {
         int j = mine[m];
@@ -446,38 +467,43 @@ static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
         skip = stop;
         if (skip) continue;
         int t = ctx->n_workers > 1 ? omp_get_thread_num() : 0;
-        uint64_t key;
-        int resumed;
-        int rc = estimate_pair(ctx, t, pq[2 * j], pq[2 * j + 1], &out->pairs[j], &key, &resumed);
+        uint64_t key = 0;
+        int resumed = 0;
+        sasnav_navigate_pair np;
+        int rc = estimate_pair(ctx, t, j, pq[2 * j], pq[2 * j + 1], &np, &key, &resumed);
+        if (!rc) rc = put_pair(ctx, j, &np);
         if (ctx->keys) ctx->keys[j] = key;
         codes[j] = rc;
         if (rc) {
-            snprintf(messages[j], sizeof messages[j], "%s", sasnav_last_error());
+#pragma omp critical(sasnav_navigate_failure)
+            if (j < first_failed) {
+                first_failed = j;
+                snprintf(message, sizeof message, "%s", sasnav_last_error());
+            }
 #pragma omp atomic write
             stop = 1;
         } else {
 #pragma omp critical(sasnav_navigate_progress)
             {
                 done++;
-                report(ctx, done, n_mine, &out->pairs[j], key, resumed);
+                report(ctx, done, n_mine, &np, key, resumed);
             }
         }
     }
     out->seconds_estimation = sasnav_now_seconds() - t_est;
     out->pairs_per_second = out->seconds_estimation > 0 ? n_mine / out->seconds_estimation : 0.0;
     free(mine);
-    int rc = SASNAV_OK;
-    for (int j = 0; j < total && !rc; j++)
-        if (codes[j]) rc = sasnav_set_error(codes[j], "%s", messages[j]);
+    int rc = first_failed < total ? sasnav_set_error(codes[first_failed], "%s", message) : SASNAV_OK;
     free(pq);
     free(codes);
-    free(messages);
     free(use_long);
     out->n_pairs = k;
     for (int j = 0; j < k; j++) {
-        int st = out->pairs[j].status;
+        sasnav_navigate_pair np;
+        get_pair(ctx, j, &np);
+        int st = np.status;
         if (st != SASNAV_OK && st != SASNAV_ERR_NOT_CONVERGED) out->n_failed++;
-        out->seconds_pairs += out->pairs[j].result.seconds;
+        out->seconds_pairs += np.result.seconds;
     }
     out->seconds_per_pair = k > 0 ? out->seconds_pairs / k : 0.0;
     return rc;
@@ -588,17 +614,23 @@ static sasnav_pose estimate_sigma(const nav_ctx *ctx, const sasnav_navigate_pair
 
 /* Motion-model prediction of pair j: the mean of the nearest usable
  * estimates before and after it (either alone at the run's ends). */
-static sasnav_pose motion_prediction(const sasnav_navigation *out, int n, int j)
+static sasnav_pose motion_prediction(const nav_ctx *ctx, int n, int j)
 {
     int lo = -1, hi = -1;
-    for (int i = j - 1; i >= 0 && lo < 0; i--)
-        if (leanable(&out->pairs[i])) lo = i;
-    for (int i = j + 1; i < n && hi < 0; i++)
-        if (leanable(&out->pairs[i])) hi = i;
-    if (lo < 0 && hi < 0) return out->pairs[j].result.error;
-    if (lo < 0) return out->pairs[hi].result.error;
-    if (hi < 0) return out->pairs[lo].result.error;
-    sasnav_pose a = out->pairs[lo].result.error, b = out->pairs[hi].result.error;
+    sasnav_navigate_pair np, lo_np, hi_np;
+    for (int i = j - 1; i >= 0 && lo < 0; i--) {
+        get_pair(ctx, i, &lo_np);
+        if (leanable(&lo_np)) lo = i;
+    }
+    for (int i = j + 1; i < n && hi < 0; i++) {
+        get_pair(ctx, i, &hi_np);
+        if (leanable(&hi_np)) hi = i;
+    }
+    get_pair(ctx, j, &np);
+    if (lo < 0 && hi < 0) return np.result.error;
+    if (lo < 0) return hi_np.result.error;
+    if (hi < 0) return lo_np.result.error;
+    sasnav_pose a = lo_np.result.error, b = hi_np.result.error;
     double t = (double)(j - lo) / (double)(hi - lo);
     return (sasnav_pose){a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), a.theta + t * (b.theta - a.theta)};
 }
@@ -610,8 +642,10 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
     const sasnav_run *run = ctx->run;
     const sasnav_navigate_opts *o = ctx->opts;
     int n = run->n_pings - 1;
-    for (int j = 0; j < out->n_pairs; j++) {
-        sasnav_navigate_pair *np = &out->pairs[j];
+    int rc = SASNAV_OK;
+    sasnav_navigate_pair pair, *np = &pair;
+    for (int j = 0; j < out->n_pairs && !rc; j++) {
+        get_pair(ctx, j, np);
         np->first_verdict = np->verdict = usable(np) ? np->result.verdict
                                         : np->status == SASNAV_ERR_NO_OVERLAP ? SASNAV_VERDICT_NO_OVERLAP
                                                                                : SASNAV_VERDICT_FAILED;
@@ -619,38 +653,57 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
         np->fused = np->result.error;
         np->aiding = (sasnav_pose){0, 0, 0};
         np->aiding_sigma = (sasnav_pose){INFINITY, INFINITY, INFINITY};
+        rc = put_pair(ctx, j, np);
     }
-    if (!o->resolve || n < 1) return SASNAV_OK;
+    if (rc || !o->resolve || n < 1) return rc;
     sasnav_pose *a = malloc(sizeof *a * (size_t)n), *sa = malloc(sizeof *sa * (size_t)n);
     sasnav_pose *m = malloc(sizeof *m * (size_t)n), *sm = malloc(sizeof *sm * (size_t)n);
     sasnav_pose *e = malloc(sizeof *e * (size_t)n);
-    fuse_option *pool = malloc(sizeof *pool * (size_t)n * SASNAV_PAIR_MAX_CANDIDATES);
+    fuse_option *pool = NULL;
     fuse_option **opts = malloc(sizeof *opts * (size_t)n);
     int *nopt = malloc(sizeof(int) * (size_t)n), *choice = malloc(sizeof(int) * (size_t)n);
-    int rc = SASNAV_OK;
-    if (!a || !sa || !m || !sm || !e || !pool || !opts || !nopt || !choice) {
+    if (!a || !sa || !m || !sm || !e || !opts || !nopt || !choice) {
         rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the joint resolution");
         goto done;
     }
     int with_aiding = o->use_aiding && run->aiding != NULL;
     out->aiding_used = with_aiding;
-    if (with_aiding) fuse_aiding_errors(run, out->pairs, n, a, sa);
-    else
-        for (int j = 0; j < n; j++) {
-            a[j] = (sasnav_pose){0, 0, 0};
-            sa[j] = (sasnav_pose){INFINITY, INFINITY, INFINITY};
-        }
-    for (int j = 0; j < n; j++) {
-        out->pairs[j].aiding = a[j];
-        out->pairs[j].aiding_sigma = sa[j];
+    for (int j = 0; j < n && !rc; j++) {
+        get_pair(ctx, j, np);
+        a[j] = (sasnav_pose){0, 0, 0};
+        sa[j] = (sasnav_pose){INFINITY, INFINITY, INFINITY};
+        if (with_aiding) fuse_aiding_error(run, np->p, np->q, np->nominal, np->result.error.theta, &a[j], &sa[j]);
+        np->aiding = a[j];
+        np->aiding_sigma = sa[j];
+        rc = put_pair(ctx, j, np);
     }
+    if (rc) goto done;
     /* 1. The joint choice among each pair's distinct refined candidates
      * (the chosen one at its final-stage value). Pairs without a usable
-     * estimate offer their nominal step (motion error 0) at no eta cost. */
+     * estimate offer their nominal step (motion error 0) at no eta cost.
+     * The options of all pairs in one pool, as many as they have. */
+    size_t n_pool = 0;
     for (int j = 0; j < n; j++) {
-        const sasnav_navigate_pair *np = &out->pairs[j];
+        get_pair(ctx, j, np);
         const sasnav_pair_result *r = &np->result;
-        opts[j] = pool + (size_t)j * SASNAV_PAIR_MAX_CANDIDATES;
+        nopt[j] = 0;
+        if (usable(np))
+            for (int k = 0; k < r->n_candidates; k++)
+                if (r->candidates[k].refined && r->candidates[k].same_as < 0) nopt[j]++;
+        if (nopt[j] == 0) nopt[j] = 1;
+        n_pool += (size_t)nopt[j];
+    }
+    pool = malloc(sizeof *pool * n_pool);
+    if (!pool) {
+        rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the joint resolution");
+        goto done;
+    }
+    n_pool = 0;
+    for (int j = 0; j < n; j++) {
+        get_pair(ctx, j, np);
+        const sasnav_pair_result *r = &np->result;
+        opts[j] = pool + n_pool;
+        n_pool += (size_t)nopt[j];
         nopt[j] = 0;
         if (!usable(np) || r->n_candidates == 0) {
             opts[j][0] = (fuse_option){usable(np) ? r->error : (sasnav_pose){0, 0, 0}, NAN, -1};
@@ -667,7 +720,7 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
     rc = fuse_choose(n, opts, nopt, a, sa, o->motion_sigma, o->eta_weight, choice);
     if (rc) goto done;
     for (int j = 0; j < n && !rc; j++) {
-        sasnav_navigate_pair *np = &out->pairs[j];
+        get_pair(ctx, j, np);
         const fuse_option *c = &opts[j][choice[j]];
         if (!usable(np) || c->candidate < 0 || c->candidate == np->result.chosen) continue;
         int taken = 0;
@@ -678,6 +731,7 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
             /* Only the aiding settles an ambiguity (below); the motion
              * model's choice stays as doubtful as the pair was. */
             np->verdict = worse(np->first_verdict, np->result.verdict);
+            rc = put_pair(ctx, j, np);
         }
     }
     if (rc) goto done;
@@ -686,7 +740,7 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
      * that does not give an estimate that is better and agrees, the pair
      * is bridged. Estimates that agree with the aiding are confirmed. */
     for (int j = 0; j < n && !rc && o->method != SASNAV_METHOD_AIDING; j++) {
-        sasnav_navigate_pair *np = &out->pairs[j];
+        get_pair(ctx, j, np);
         int ok_alone = usable(np) && np->verdict != SASNAV_VERDICT_FAILED &&
                        np->verdict != SASNAV_VERDICT_NO_OVERLAP;
         int agree = agrees(ctx, np->result.error, a[j], sa[j]);
@@ -695,6 +749,7 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
                 isfinite(sa[j].x + sa[j].theta))
                 np->verdict = SASNAV_VERDICT_OK; /* the aiding settles the ambiguity, or
                                                     confirms an estimate without verdict */
+            rc = put_pair(ctx, j, np);
             continue;
         }
         if (np->status == SASNAV_ERR_NO_OVERLAP && !with_aiding) continue;
@@ -704,7 +759,7 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
             if (isfinite(sa[j].y)) start.y = a[j].y;
             if (isfinite(sa[j].theta)) start.theta = a[j].theta;
         } else {
-            start = motion_prediction(out, n, j);
+            start = motion_prediction(ctx, n, j);
         }
         int taken = 0;
         if (np->status != SASNAV_ERR_NO_OVERLAP) rc = reestimate(ctx, np, start, a[j], sa[j], ok_alone, &taken);
@@ -722,21 +777,24 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
         } else if (!ok_alone || !agree) {
             np->resolution = SASNAV_RESOLVED_BRIDGED;
         }
+        if (!rc) rc = put_pair(ctx, j, np);
     }
     if (rc) goto done;
     /* 3. The robust smoother. */
     for (int j = 0; j < n; j++) {
-        m[j] = out->pairs[j].result.error;
-        sm[j] = estimate_sigma(ctx, &out->pairs[j]);
+        get_pair(ctx, j, np);
+        m[j] = np->result.error;
+        sm[j] = estimate_sigma(ctx, np);
     }
     rc = fuse_smooth_bias(n, m, sm, a, sa, o->motion_sigma, 3.0,
                           with_aiding ? o->aiding_bias_sigma : (sasnav_pose){0, 0, 0}, e, NULL);
     if (rc) goto done;
-    for (int j = 0; j < n; j++) {
-        sasnav_navigate_pair *np = &out->pairs[j];
+    for (int j = 0; j < n && !rc; j++) {
+        get_pair(ctx, j, np);
         np->fused = e[j];
         np->result.displacement = (sasnav_pose){np->nominal.x + e[j].x, np->nominal.y + e[j].y,
                                                 np->nominal.theta + e[j].theta};
+        rc = put_pair(ctx, j, np);
     }
 done:
     free(a);
@@ -752,15 +810,21 @@ done:
 }
 
 /* Counts and truth comparisons after the resolution. */
-static void pair_summary(const sasnav_run *run, sasnav_navigation *out)
+static int pair_summary(nav_ctx *ctx, sasnav_navigation *out)
 {
     out->n_flagged = out->n_resolved = 0;
-    for (int j = 0; j < out->n_pairs; j++) {
-        sasnav_navigate_pair *np = &out->pairs[j];
-        if (np->verdict != SASNAV_VERDICT_OK || np->resolution == SASNAV_RESOLVED_BRIDGED) out->n_flagged++;
-        if (np->resolution != SASNAV_RESOLVED_NONE) out->n_resolved++;
-        if (run->truth) np->error = pose_sub(np->fused, np->truth);
+    int rc = SASNAV_OK;
+    for (int j = 0; j < out->n_pairs && !rc; j++) {
+        sasnav_navigate_pair np;
+        get_pair(ctx, j, &np);
+        if (np.verdict != SASNAV_VERDICT_OK || np.resolution == SASNAV_RESOLVED_BRIDGED) out->n_flagged++;
+        if (np.resolution != SASNAV_RESOLVED_NONE) out->n_resolved++;
+        if (ctx->run->truth) {
+            np.error = pose_sub(np.fused, np.truth);
+            rc = put_pair(ctx, j, &np);
+        }
     }
+    return rc;
 }
 
 /* Per-ping Tx-array offsets scaled by the vehicle's speed at each ping
@@ -768,7 +832,7 @@ static void pair_summary(const sasnav_run *run, sasnav_navigation *out)
  * relative speed excess. From the DVL (the mean of the two intervals
  * around the ping) when `from_dvl`, else from the consecutive pairs'
  * surge motion errors (their mean over the nominal step). */
-static void speed_lags(const nav_ctx *ctx, const sasnav_navigation *out, int from_dvl, double *lags)
+static void speed_lags(const nav_ctx *ctx, int from_dvl, double *lags)
 {
     const sasnav_run *run = ctx->run;
     int n = run->n_pings;
@@ -794,9 +858,10 @@ static void speed_lags(const nav_ctx *ctx, const sasnav_navigation *out, int fro
             double sum = 0, w = 0;
             for (int j = p - 1; j <= p; j++) {
                 if (j < 0 || j >= n - 1) continue;
-                const sasnav_navigate_pair *np = &out->pairs[j];
-                if (np->first_verdict != SASNAV_VERDICT_OK || !(fabs(np->nominal.x) > 0)) continue;
-                sum += np->result.error.x / fabs(np->nominal.x);
+                sasnav_navigate_pair np;
+                get_pair(ctx, j, &np);
+                if (np.first_verdict != SASNAV_VERDICT_OK || !(fabs(np.nominal.x) > 0)) continue;
+                sum += np.result.error.x / fabs(np.nominal.x);
                 w += 1;
             }
             a = w > 0 ? sum / w : 0.0;
@@ -810,7 +875,7 @@ static void speed_lags(const nav_ctx *ctx, const sasnav_navigation *out, int fro
  * first estimate is ok is estimated again from it with the per-ping
  * offsets (local stages only); its candidates and margin stay the first
  * pass's. Concurrent over pairs like the first pass. */
-static int second_pass(nav_ctx *ctx, sasnav_navigation *out)
+static int second_pass(nav_ctx *ctx)
 {
     int n = ctx->run->n_pings - 1, stop = 0;
     int *codes = calloc((size_t)(n > 0 ? n : 1), sizeof(int));
@@ -820,7 +885,8 @@ static int second_pass(nav_ctx *ctx, sasnav_navigation *out)
         int skip;
 #pragma omp atomic read
         skip = stop;
-        sasnav_navigate_pair *np = &out->pairs[j];
+        sasnav_navigate_pair pair, *np = &pair;
+        get_pair(ctx, j, np);
         if (skip || np->first_verdict != SASNAV_VERDICT_OK || !usable(np)) continue;
         int t = ctx->n_workers > 1 ? omp_get_thread_num() : 0;
         sasnav_pair *est = ctx->estimators[t];
@@ -838,6 +904,12 @@ static int second_pass(nav_ctx *ctx, sasnav_navigation *out)
         np->status = r.status;
         np->first_result = r;
         np->first_status = r.status;
+        rc = put_pair(ctx, j, np);
+        if (rc) {
+            codes[j] = rc;
+#pragma omp atomic write
+            stop = 1;
+        }
     }
     int rc = SASNAV_OK;
     for (int j = 0; j < n && !rc; j++)
@@ -854,7 +926,11 @@ static int solve_centroids(const nav_ctx *ctx, sasnav_navigation *out, sasnav_po
     if (out->n_pairs == n_chain) {
         sasnav_pose *disp = malloc(sizeof *disp * (size_t)n_chain);
         if (!disp) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-        for (int j = 0; j < n_chain; j++) disp[j] = out->pairs[j].result.displacement;
+        for (int j = 0; j < n_chain; j++) {
+            sasnav_navigate_pair np;
+            get_pair(ctx, j, &np);
+            disp[j] = np.result.displacement;
+        }
         int rc = sasnav_traj_compose(first, disp, n, out->centroids);
         free(disp);
         return rc;
@@ -862,7 +938,8 @@ static int solve_centroids(const nav_ctx *ctx, sasnav_navigation *out, sasnav_po
     sasnav_traj_link *links = malloc(sizeof *links * (size_t)out->n_pairs);
     if (!links) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     for (int j = 0; j < out->n_pairs; j++) {
-        const sasnav_navigate_pair *np = &out->pairs[j];
+        sasnav_navigate_pair pair, *np = &pair;
+        get_pair(ctx, j, np);
         sasnav_pose s = np->q - np->p == 1 ? ctx->opts->link_sigma : ctx->opts->long_sigma;
         if (np->status != SASNAV_OK && np->status != SASNAV_ERR_NOT_CONVERGED) {
             /* A failed pair stands in with its nominal displacement, so that
@@ -941,21 +1018,27 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
     if (o->speed_lags && o->method == SASNAV_METHOD_SUBSPACE && dvl && !o->reuse) {
         ctx->lags = malloc(sizeof(double) * (size_t)n);
         if (!ctx->lags) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-        speed_lags(ctx, out, 1, ctx->lags);
+        speed_lags(ctx, 1, ctx->lags);
     }
     int rc = estimate_all(ctx, out);
     if (rc || ctx->n_parts > 1 || ctx->keys) return rc; /* a part: first estimates only */
     if (o->speed_lags == 2 && o->method == SASNAV_METHOD_SUBSPACE && !ctx->lags && !o->reuse) {
-        for (int j = 0; j < out->n_pairs; j++) out->pairs[j].first_verdict = out->pairs[j].result.verdict;
+        for (int j = 0; j < out->n_pairs && !rc; j++) {
+            sasnav_navigate_pair np;
+            get_pair(ctx, j, &np);
+            np.first_verdict = np.result.verdict;
+            rc = put_pair(ctx, j, &np);
+        }
+        if (rc) return rc;
         ctx->lags = malloc(sizeof(double) * (size_t)n);
         if (!ctx->lags) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-        speed_lags(ctx, out, 0, ctx->lags);
-        rc = second_pass(ctx, out);
+        speed_lags(ctx, 0, ctx->lags);
+        rc = second_pass(ctx);
         if (rc) return rc;
     }
     rc = resolve_pairs(ctx, out);
+    if (!rc) rc = pair_summary(ctx, out);
     if (rc) return rc;
-    pair_summary(run, out);
     sasnav_pose first = sasnav_ping_centroid(&run->nav[0]);
     rc = solve_centroids(ctx, out, first);
     if (rc) return rc;
@@ -967,6 +1050,24 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
     if (rc) return rc;
     if (run->truth) rc = compare_with_truth(ctx, out);
     return rc;
+}
+
+/* The pairs into the output: unpacked into out->pairs, or kept packed
+ * (opts.compact_pairs; ctx->pairs is then emptied). */
+static int hand_out_pairs(nav_ctx *ctx, sasnav_navigation *out)
+{
+    if (ctx->opts->compact_pairs) {
+        pair_store *s = malloc(sizeof *s);
+        if (!s) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        *s = ctx->pairs;
+        memset(&ctx->pairs, 0, sizeof ctx->pairs);
+        out->packed = s;
+        return SASNAV_OK;
+    }
+    out->pairs = malloc(sizeof *out->pairs * (size_t)(out->n_pairs > 0 ? out->n_pairs : 1));
+    if (!out->pairs) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    for (int j = 0; j < out->n_pairs; j++) get_pair(ctx, j, &out->pairs[j]);
+    return SASNAV_OK;
 }
 
 /* sasnav_navigate, or with keys != NULL the first estimates of one part
@@ -985,7 +1086,7 @@ static int navigate_run(const sasnav_run *run, const sasnav_navigate_opts *opts,
     if (rc) return rc;
     nav_ctx ctx = {run, opts, NULL, 1, sasnav_now_seconds(),
                    run->array.n_rx > 1 ? 0.5 * fabs(run->array.rx_u[1] - run->array.rx_u[0]) : 0.025,
-                   NULL, NULL, 0, options_digest(run, opts), part, n_parts, NULL, NULL};
+                   NULL, NULL, 0, options_digest(run, opts), part, n_parts, NULL, NULL, {0, NULL, NULL}};
     if (keys) {
         ctx.keys = calloc((size_t)(2 * run->n_pings), sizeof *ctx.keys);
         if (!ctx.keys) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
@@ -1029,6 +1130,8 @@ static int navigate_run(const sasnav_run *run, const sasnav_navigate_opts *opts,
         }
     }
     if (!rc) rc = navigate(&ctx, out);
+    if (!rc) rc = hand_out_pairs(&ctx, out);
+    pair_store_free(&ctx.pairs);
     free(ctx.done);
     free(ctx.bufs);
     if (ctx.estimators)
@@ -1075,12 +1178,14 @@ int sasnav_navigate_part(const sasnav_run *run, const sasnav_navigate_opts *opts
     }
     int n = 0;
     for (int j = part; j < nav.n_pairs; j += n_parts) {
+        sasnav_navigate_pair np;
+        sasnav_navigation_pair(&nav, j, &np);
         memset(&r[n], 0, sizeof r[n]);
         r[n].key = keys[j];
-        r[n].p = nav.pairs[j].p;
-        r[n].q = nav.pairs[j].q;
-        r[n].status = nav.pairs[j].first_status;
-        r[n].result = nav.pairs[j].first_result;
+        r[n].p = np.p;
+        r[n].q = np.q;
+        r[n].status = np.first_status;
+        r[n].result = np.first_result;
         n++;
     }
     free(keys);

@@ -380,6 +380,7 @@ class NavigateOpts(Structure):  # navigate.h
         ("reuse", c_void_p),  # const sasnav_navigation *
         ("done", POINTER(PairRecord)),
         ("n_done", c_int),
+        ("compact_pairs", c_int),
         ("progress", PROGRESS_FN),
         ("progress_user", c_void_p),
     ]
@@ -435,6 +436,7 @@ class NavigationC(Structure):  # navigate.h: struct sasnav_navigation
         ("seconds_estimation", c_double),
         ("pairs_per_second", c_double),
         ("threads_over_pairs", c_int),
+        ("packed", c_void_p),
     ]
 
 
