@@ -34,10 +34,18 @@ static void save_state(const sasnav_refine_state *st, void *user)
     }
 }
 
+/* Progress over windows (runs longer than --window). */
+static void window_done(int done, int total, const sasnav_refine_report *w, void *user)
+{
+    (void)w;
+    refine_ckpt *k = user;
+    cli_progress_update(&k->progress, done, total);
+}
+
 static const char *help =
     "usage: sasnav refine run.h5 nav.h5 -o refined.h5 [--grid X0,X1,NX,Y0,Y1,NY]\n"
     "                     [--sweeps N] [--surge-range M] [--sway-range M] [--sparsity EPS]\n"
-    "                     [--threads N] [--checkpoint FILE]\n"
+    "                     [--window N] [--threads N] [--checkpoint FILE]\n"
     "\n"
     "Refines a navigation (the output of 'sasnav navigate', or any navigation\n"
     "file of the run's pings) with all pings together: for each ping in turn,\n"
@@ -62,11 +70,15 @@ static const char *help =
     "                    scene of few strong scatterers; 0: uniform damping)\n"
     "  --surge-range M   half-width of the surge search, m (default 0.012)\n"
     "  --sway-range M    half-width of the sway search, m (default 0.0015)\n"
+    "  --window N        runs longer than N pings are refined in windows of N\n"
+    "                    pings, half overlapping, joined into one navigation;\n"
+    "                    memory and time per ping are those of one window\n"
+    "                    (default 64; 0: the whole run at once)\n"
     "  --threads N       OpenMP threads (default: all cores)\n"
     "  --checkpoint FILE  keep the refinement's state in FILE after every sweep;\n"
     "                    the same command run again after an interruption\n"
     "                    resumes from it with the same result (docs/cli.md).\n"
-    "                    FILE is removed once -o is written\n"
+    "                    FILE is removed once -o is written (runs of one window)\n"
     "  -o FILE           output navigation (HDF5, with the run's truth if any)\n";
 
 int cmd_refine(int argc, char **argv)
@@ -76,11 +88,12 @@ int cmd_refine(int argc, char **argv)
         {"surge-range", required_argument, 0, 'u'}, {"sway-range", required_argument, 0, 'v'},
         {"threads", required_argument, 0, 't'},     {"output", required_argument, 0, 'o'},
         {"sparsity", required_argument, 0, 'e'},    {"help", no_argument, 0, 'h'},
-        {"checkpoint", required_argument, 0, 'C'},  {0, 0, 0, 0}};
+        {"checkpoint", required_argument, 0, 'C'},  {"window", required_argument, 0, 'w'},
+        {0, 0, 0, 0}};
     sasnav_refine_opts ro;
     sasnav_refine_default_opts(&ro);
     const char *output = NULL, *checkpoint = NULL;
-    long sweeps = ro.sweeps, threads = 0;
+    long sweeps = ro.sweeps, threads = 0, window = 64;
     int opt;
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
@@ -103,6 +116,10 @@ int cmd_refine(int argc, char **argv)
                 return cli_usage("refine", "--sparsity needs a number in [0, 1e6]");
             break;
         case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_usage("refine", "--threads needs 0..1024"); break;
+        case 'w':
+            if (cli_parse_int(optarg, 0, 1000000, &window) || (window > 0 && window < 3))
+                return cli_usage("refine", "--window needs 0 (the whole run) or a number of pings >= 3");
+            break;
         case 'o': output = optarg; break;
         case 'C': checkpoint = optarg; break;
         case 'h': fputs(help, stdout); return 0;
@@ -117,7 +134,7 @@ int cmd_refine(int argc, char **argv)
     ro.nthreads = (int)threads;
     const char *run_path = argv[optind], *nav_path = argv[optind + 1];
     sasnav_run *run = NULL;
-    int rc = sasnav_run_read(run_path, &run);
+    int rc = sasnav_run_open(run_path, &run); /* streamed: read a window at a time */
     if (rc) return cli_fail("refine", rc, "cannot read %s", run_path);
     int n = 0;
     sasnav_ping_pose *nav = NULL;
@@ -131,12 +148,21 @@ int cmd_refine(int argc, char **argv)
         free(nav);
         return cli_fail("refine", 0, "%s has %d pings, %s has %d", nav_path, n, run_path, run->n_pings);
     }
+    int windowed = window > 0 && window < n;
+    if (checkpoint && windowed) {
+        sasnav_run_free(run);
+        free(nav);
+        return cli_usage("refine", "--checkpoint works on runs of one window: %s has %d pings, --window is %ld "
+                                   "(use --window 0 to refine it whole)", run_path, n, window);
+    }
     sasnav_refine_state resume;
     memset(&resume, 0, sizeof resume);
     refine_ckpt ck = {checkpoint, 0, {0}, ro.sweeps};
-    cli_progress_init(&ck.progress, "refine", "sweeps");
-    ro.sweep_done = save_state;
-    ro.sweep_user = &ck;
+    cli_progress_init(&ck.progress, "refine", windowed ? "windows" : "sweeps");
+    if (!windowed) {
+        ro.sweep_done = save_state;
+        ro.sweep_user = &ck;
+    }
     if (checkpoint) {
         if (access(checkpoint, F_OK) == 0) {
             rc = sasnav_refine_state_read(checkpoint, &resume);
@@ -152,7 +178,9 @@ int cmd_refine(int argc, char **argv)
     }
     sasnav_ping_pose *out = malloc(sizeof *out * n);
     sasnav_refine_report rep;
-    rc = out ? sasnav_refine(run, nav, &ro, out, &rep) : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    rc = out ? sasnav_refine_windows(run, nav, windowed ? (int)window : 0, &ro, out, &rep,
+                                     windowed ? window_done : NULL, &ck)
+             : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     int refined = !rc, rc_lib = rc;
     cli_progress_end(&ck.progress);
     if (!rc) rc = sasnav_nav_write(output, n, out, run->truth);
@@ -189,7 +217,11 @@ int cmd_refine(int argc, char **argv)
                 "refinement needs a scene of a few strong scatterers and is unreliable on this run; "
                 "the input navigation is likely better\n",
                 rep.misfit[0], SASNAV_REFINE_MISFIT_MAX);
-    fprintf(stderr, "sasnav refine: %d pings, %d sweeps, %.1f s -> %s\n", n, rep.sweeps, rep.seconds, output);
+    if (windowed)
+        fprintf(stderr, "sasnav refine: %d pings in windows of %ld, at most %d sweeps, %.1f s -> %s\n", n, window,
+                rep.sweeps, rep.seconds, output);
+    else
+        fprintf(stderr, "sasnav refine: %d pings, %d sweeps, %.1f s -> %s\n", n, rep.sweeps, rep.seconds, output);
     sasnav_run_free(run);
     free(nav);
     free(out);

@@ -182,6 +182,39 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in,
                   const sasnav_refine_opts *opts, sasnav_ping_pose *nav_out,
                   sasnav_refine_report *report);
 
+/* Told after each window of sasnav_refine_windows: windows done / in all,
+ * and that window's report. */
+typedef void (*sasnav_refine_window_fn)(int done, int total, const sasnav_refine_report *window,
+                                        void *user);
+
+/* sasnav_refine of a long run in windows of `window` consecutive pings
+ * (>= 3), each starting window / 2 pings after the last (the last one ends
+ * at the run's last ping), so that memory and the cost per sweep are those
+ * of one window whatever the run's length; `run` may be streamed
+ * (sasnav_run_open: each window's pings are read into memory in turn).
+ * Each window is refined from nav_in as sasnav_refine does (its scene grid
+ * the window's own when opts->grid is the default). The windows' moves are
+ * joined: each window's common move is not observable (sasnav_refine
+ * removes it), so window k is shifted by the mean difference between its
+ * moves and window k - 1's over the pings they share; each ping takes its
+ * move from the window whose centre is nearest; the mean of all moves is
+ * removed (the input's mean position kept, as sasnav_refine). The shifts
+ * are a random walk over the windows: on long runs the moves can drift
+ * slowly along the run (docs/navigation.md, "Windows").
+ * window <= 0 or >= run->n_pings: one window, the same bits as
+ * sasnav_refine on the run in memory (checkpoints allowed). With several
+ * windows opts->sweep_done and opts->resume must be NULL (SASNAV_ERR_ARG).
+ * The report: sweeps = the most of any window; misfit[i] the mean over
+ * the windows of their misfit after sweep i (a window that stopped earlier
+ * counts with its last); rms_move[i] the rms over the windows (0 for one
+ * that stopped); undone and unreliable: any window's; mean_move_*: the
+ * common move removed from the joined moves, along and across the run's
+ * mean heading; seconds: all. `done` (may be NULL) is called after each
+ * window. Errors: those of sasnav_refine and of sasnav_run_subset. */
+int sasnav_refine_windows(const sasnav_run *run, const sasnav_ping_pose *nav_in, int window,
+                          const sasnav_refine_opts *opts, sasnav_ping_pose *nav_out,
+                          sasnav_refine_report *report, sasnav_refine_window_fn done, void *user);
+
 #ifdef __cplusplus
 }
 #endif

@@ -521,3 +521,143 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const s
     free(saved_v);
     return rc;
 }
+
+/* --- windows over long runs ----------------------------------------------- */
+
+/* Adds window w's report to the joined one (sums; refine_windows finishes
+ * the means). */
+static void add_window_report(sasnav_refine_report *all, const sasnav_refine_report *w, double *rms2)
+{
+    if (w->sweeps > all->sweeps) all->sweeps = w->sweeps;
+    for (int i = 0; i <= SASNAV_REFINE_MAX_SWEEPS; i++)
+        all->misfit[i] += w->misfit[i <= w->sweeps ? i : w->sweeps];
+    for (int i = 0; i < SASNAV_REFINE_MAX_SWEEPS; i++)
+        if (i < w->sweeps) rms2[i] += w->rms_move[i] * w->rms_move[i];
+    all->undone |= w->undone;
+    all->unreliable |= w->unreliable;
+}
+
+/* Start of window k of n pings in windows of W, `step` apart. */
+static int window_start(int k, int n, int W, int step) { return k * step < n - W ? k * step : n - W; }
+
+/* The window whose centre is nearest to ping i (the earlier on a tie). */
+static int window_owning(int i, int n, int W, int step)
+{
+    int n_win = (n - W + step - 1) / step + 1, best = 0;
+    double best_d = HUGE_VAL;
+    for (int k = 0; k < n_win; k++) {
+        double d = fabs(i - (window_start(k, n, W, step) + 0.5 * (W - 1)));
+        if (d < best_d) {
+            best_d = d;
+            best = k;
+        }
+    }
+    return best;
+}
+
+int sasnav_refine_windows(const sasnav_run *run, const sasnav_ping_pose *nav_in, int window,
+                          const sasnav_refine_opts *opts, sasnav_ping_pose *nav_out,
+                          sasnav_refine_report *report, sasnav_refine_window_fn done, void *user)
+{
+    double t0 = sasnav_now_seconds();
+    if (!run || !nav_in || !nav_out) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    int n = run->n_pings;
+    if (window > 0 && window < 3)
+        return sasnav_set_error(SASNAV_ERR_ARG, "refine: a window needs at least 3 pings (got %d)", window);
+    int whole = window <= 0 || window >= n;
+    if (!whole && opts && (opts->sweep_done || opts->resume))
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "refine: checkpoints work on one window only (a run of at most %d pings)", window);
+    int W = whole ? n : window, step = W / 2 > 0 ? W / 2 : 1;
+    int n_win = whole ? 1 : (n - W + step - 1) / step + 1;
+    sasnav_refine_report rep, wrep;
+    memset(&rep, 0, sizeof rep);
+    double rms2[SASNAV_REFINE_MAX_SWEEPS] = {0};
+    double *mx = malloc(sizeof(double) * 4 * (size_t)(n > 0 ? n : 1));
+    int *pings = malloc(sizeof(int) * (size_t)(W > 0 ? W : 1));
+    sasnav_ping_pose *wout = malloc(sizeof *wout * (size_t)(W > 0 ? W : 1));
+    if (!mx || !pings || !wout) {
+        free(mx);
+        free(pings);
+        free(wout);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    }
+    double *my = mx + n, *px = mx + 2 * n, *py = mx + 3 * n; /* moves: joined, previous window's */
+    double ox = 0, oy = 0;                                   /* window k's shift */
+    int rc = SASNAV_OK, prev_start = -1;
+    for (int k = 0; k < n_win && !rc; k++) {
+        int s = whole ? 0 : window_start(k, n, W, step);
+        for (int i = 0; i < W; i++) pings[i] = s + i;
+        sasnav_run *sub = NULL;
+        const sasnav_run *r = run;
+        if (!run->raw || !whole) {
+            rc = sasnav_run_subset(run, pings, W, NULL, 0, &sub);
+            r = sub;
+        }
+        if (!rc) rc = sasnav_refine(r, nav_in + s, opts, wout, &wrep);
+        sasnav_run_free(sub);
+        if (rc) break;
+        if (whole) {
+            memcpy(nav_out, wout, sizeof *wout * (size_t)n);
+            rep = wrep;
+            if (done) done(1, 1, &wrep, user);
+            break;
+        }
+        /* Window k's moves, and its shift onto window k - 1 over the pings
+         * they share (prev_start + W > s: windows overlap by W - step). */
+        double sx = 0, sy = 0;
+        int shared = 0;
+        for (int i = s; k > 0 && i < prev_start + W; i++, shared++) {
+            sx += px[i] - (wout[i - s].array.x - nav_in[i].array.x);
+            sy += py[i] - (wout[i - s].array.y - nav_in[i].array.y);
+        }
+        ox = shared > 0 ? sx / shared : 0;
+        oy = shared > 0 ? sy / shared : 0;
+        for (int i = s; i < s + W; i++) {
+            double dx = wout[i - s].array.x - nav_in[i].array.x + ox;
+            double dy = wout[i - s].array.y - nav_in[i].array.y + oy;
+            if (window_owning(i, n, W, step) == k) {
+                mx[i] = dx;
+                my[i] = dy;
+            }
+            px[i] = dx;
+            py[i] = dy;
+        }
+        prev_start = s;
+        add_window_report(&rep, &wrep, rms2);
+        if (done) done(k + 1, n_win, &wrep, user);
+    }
+    if (!rc && !whole) {
+        /* The common move of the joined moves, removed; reported along and
+         * across the run's mean heading. */
+        double ax = 0, ay = 0, c = 0, sn = 0;
+        for (int i = 0; i < n; i++) {
+            ax += mx[i];
+            ay += my[i];
+            c += cos(nav_in[i].array.theta);
+            sn += sin(nav_in[i].array.theta);
+        }
+        ax /= n;
+        ay /= n;
+        double h = atan2(sn, c);
+        rep.mean_move_surge = ax * cos(h) + ay * sin(h);
+        rep.mean_move_sway = -ax * sin(h) + ay * cos(h);
+        for (int i = 0; i < n; i++) {
+            sasnav_ping_pose q = nav_in[i];
+            double dx = mx[i] - ax, dy = my[i] - ay;
+            q.array.x += dx;
+            q.array.y += dy;
+            q.tx.x += dx;
+            q.tx.y += dy;
+            nav_out[i] = q;
+        }
+        for (int i = 0; i <= SASNAV_REFINE_MAX_SWEEPS; i++) rep.misfit[i] /= n_win;
+        for (int i = 0; i < rep.sweeps; i++) rep.rms_move[i] = sqrt(rms2[i] / n_win);
+    }
+    rep.seconds = sasnav_now_seconds() - t0;
+    if (!rc && report) *report = rep;
+    free(mx);
+    free(pings);
+    free(wout);
+    return rc;
+}

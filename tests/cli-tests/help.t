@@ -294,7 +294,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   $ sasnav refine --help
   usage: sasnav refine run.h5 nav.h5 -o refined.h5 [--grid X0,X1,NX,Y0,Y1,NY]
                        [--sweeps N] [--surge-range M] [--sway-range M] [--sparsity EPS]
-                       [--threads N] [--checkpoint FILE]
+                       [--window N] [--threads N] [--checkpoint FILE]
   
   Refines a navigation (the output of 'sasnav navigate', or any navigation
   file of the run's pings) with all pings together: for each ping in turn,
@@ -319,11 +319,15 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       scene of few strong scatterers; 0: uniform damping)
     --surge-range M   half-width of the surge search, m (default 0.012)
     --sway-range M    half-width of the sway search, m (default 0.0015)
+    --window N        runs longer than N pings are refined in windows of N
+                      pings, half overlapping, joined into one navigation;
+                      memory and time per ping are those of one window
+                      (default 64; 0: the whole run at once)
     --threads N       OpenMP threads (default: all cores)
     --checkpoint FILE  keep the refinement's state in FILE after every sweep;
                       the same command run again after an interruption
                       resumes from it with the same result (docs/cli.md).
-                      FILE is removed once -o is written
+                      FILE is removed once -o is written (runs of one window)
     -o FILE           output navigation (HDF5, with the run's truth if any)
 
   $ sasnav demo --help

@@ -91,6 +91,12 @@ a pointer to its help, exit status 2, nothing on standard output.
   $ sasnav refine run.h5 nav.h5 --checkpoint ./nav.h5 -o nav.h5 2>&1
   sasnav refine: --checkpoint and -o name the same file (nav.h5) (see 'sasnav refine --help')
   [2]
+  $ sasnav refine run.h5 nav.h5 --window 2 -o x.h5 2>&1
+  sasnav refine: --window needs 0 (the whole run) or a number of pings >= 3 (see 'sasnav refine --help')
+  [2]
+  $ sasnav refine run.h5 nav.h5 --window 8 --checkpoint c.h5 -o x.h5 2>&1
+  sasnav refine: --checkpoint works on runs of one window: run.h5 has 17 pings, --window is 8 (use --window 0 to refine it whole) (see 'sasnav refine --help')
+  [2]
   $ sasnav navigate run.h5 --checkpoint ./new.h5 -o emptydir/../new.h5 2>&1
   sasnav navigate: --checkpoint and -o name the same file (emptydir/../new.h5) (see 'sasnav navigate --help')
   [2]
