@@ -55,6 +55,36 @@ static int parse_taper(const char *s, sasnav_taper *t)
     return 0;
 }
 
+/* The streamed run's destination: a run writer opened on the header. */
+typedef struct {
+    const char *path;
+    sasnav_run_writer *writer;
+    sasnav_run header; /* a copy, its nav owned here */
+    sasnav_ping_pose *nav;
+    int write_failed;
+} ingest_out;
+
+static int out_begin(void *ctx, const sasnav_run *hdr)
+{
+    ingest_out *w = ctx;
+    w->header = *hdr;
+    w->nav = malloc(sizeof *w->nav * (size_t)hdr->n_pings);
+    if (!w->nav) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    memcpy(w->nav, hdr->nav, sizeof *w->nav * (size_t)hdr->n_pings);
+    w->header.nav = w->nav;
+    int rc = sasnav_run_writer_open(w->path, &w->header, &w->writer);
+    if (rc) w->write_failed = 1;
+    return rc;
+}
+
+static int out_ping(void *ctx, int k, const sasnav_cfloat *samples)
+{
+    ingest_out *w = ctx;
+    int rc = sasnav_run_writer_put(w->writer, k, samples);
+    if (rc) w->write_failed = 1;
+    return rc;
+}
+
 int cmd_ingest(int argc, char **argv)
 {
     static const struct option longopts[] = {
@@ -161,30 +191,42 @@ int cmd_ingest(int argc, char **argv)
     if (!dir) return cli_usage("ingest", "an input is required (--airsas DIR or --wav DIR)");
     if (!output) return cli_usage("ingest", "an output file is required (-o run.h5)");
 
+    /* Streamed: the flights stay in their files and are read one at a
+     * time (twice: the room response is the mean of all flights), the run
+     * written ping by ping (docs/ingest.md). */
     sasnav_airsas *rec = NULL, *bg = NULL;
-    int rc = sasnav_airsas_read(dir, &rec);
+    int rc = sasnav_airsas_open(dir, &rec);
     if (rc) return cli_fail("ingest", rc, "cannot read the AirSAS recording %s", dir);
-    if (bgdir && (rc = sasnav_airsas_read(bgdir, &bg))) {
+    if (bgdir && (rc = sasnav_airsas_open(bgdir, &bg))) {
         sasnav_airsas_free(rec);
         return cli_fail("ingest", rc, "cannot read the background recording %s", bgdir);
     }
-    sasnav_run *run = NULL;
-    rc = sasnav_airsas_to_run(rec, bg, &o, &run);
+    ingest_out w;
+    memset(&w, 0, sizeof w);
+    w.path = output;
+    sasnav_airsas_sink sink = {out_begin, out_ping, &w};
+    rc = sasnav_airsas_stream(rec, bg, &o, &sink);
     int n_recorded = rec->n_pings;
     sasnav_airsas_free(rec);
     sasnav_airsas_free(bg);
-    if (rc) return cli_fail("ingest", rc, "cannot process %s", dir);
-    rc = sasnav_run_write(output, run);
-    if (rc) {
-        sasnav_run_free(run);
-        return cli_fail("ingest", rc, "cannot write %s", output);
+    if (!rc && w.writer) {
+        rc = sasnav_run_writer_finish(w.writer, &w.header);
+        w.writer = NULL;
+        if (rc) w.write_failed = 1;
     }
+    if (w.writer) sasnav_run_writer_abort(w.writer);
+    if (rc) {
+        free(w.nav);
+        return w.write_failed ? cli_fail("ingest", rc, "cannot write %s", output)
+                              : cli_fail("ingest", rc, "cannot process %s", dir);
+    }
+    const sasnav_run *run = &w.header;
     fprintf(stderr,
             "sasnav ingest: %d of %d pings x %d samples (fs %g kHz, f0 %g kHz, B %g kHz, "
             "c %.2f m/s, t0 %.4f ms, heights Tx %.4f Rx %.4f m) -> %s\n",
             run->n_pings, n_recorded, run->win.n_samples, run->sys.sample_rate / 1e3,
             run->sys.f0 / 1e3, run->sys.bandwidth / 1e3, run->sys.sound_speed, run->win.t0 * 1e3,
             run->array.tx_height, run->array.rx_height, output);
-    sasnav_run_free(run);
+    free(w.nav);
     return 0;
 }

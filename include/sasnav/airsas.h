@@ -46,6 +46,13 @@ typedef struct {
     double group_delay;  /* samples: a delay tau is at sample tau Fs + group_delay */
     sasnav_lfm lfm;      /* transmitted LFM (WaveformParams.csv) */
     double drive_volts;  /* drive amplitude (informative) */
+    /* A recording opened with sasnav_airsas_open: samples is NULL and
+     * read_flight(flight_ctx, p, out) reads flight p into
+     * out[channel][sample] (n_channels * n_samples values) when it is
+     * needed. NULL for a recording read whole. */
+    int (*read_flight)(void *flight_ctx, int p, float *out);
+    void (*close_flights)(void *flight_ctx); /* called by sasnav_airsas_free */
+    void *flight_ctx;
 } sasnav_airsas;
 
 /* Reads DIR/{Coordinates,SysParams,WaveformParams}.csv and
@@ -55,6 +62,12 @@ typedef struct {
  * missing SysParams key, unknown waveform, non-finite value), each with a
  * message naming the file and line; SASNAV_ERR_NOMEM. */
 int sasnav_airsas_read(const char *dir, sasnav_airsas **rec);
+
+/* The same, but the flights are left in their files: only the first is
+ * read (for the shape), the others by rec->read_flight when a computation
+ * needs them (checked then, with the same errors). The memory of one
+ * flight whatever the recording's length (sasnav_airsas_stream). */
+int sasnav_airsas_open(const char *dir, sasnav_airsas **rec);
 
 /* Safe on NULL. */
 void sasnav_airsas_free(sasnav_airsas *rec);
@@ -113,6 +126,27 @@ int sasnav_airsas_remove_room(int n_pings, int n, float *ts);
  * a band the chain refuses), SASNAV_ERR_NOMEM, SASNAV_ERR_FFT. */
 int sasnav_airsas_to_run(const sasnav_airsas *rec, const sasnav_airsas *background,
                          const sasnav_airsas_opts *opts, sasnav_run **run);
+
+/* Where sasnav_airsas_stream hands its run: `begin` gets the run's header
+ * (everything but the samples: raw NULL, n_pings kept pings, the nominal
+ * circle in nav) before the first ping, `ping` each kept ping k (0-based,
+ * in order) as n_samples baseband values. A nonzero return stops the
+ * stream with that code. */
+typedef struct {
+    int (*begin)(void *ctx, const sasnav_run *header);
+    int (*ping)(void *ctx, int k, const sasnav_cfloat *samples);
+    void *ctx;
+} sasnav_airsas_sink;
+
+/* sasnav_airsas_to_run ping by ping, for recordings of any length: the
+ * same processing and the same samples bit for bit, but the output goes to
+ * `sink` as it is made and, for a recording opened with sasnav_airsas_open
+ * (and its background), the flights are read twice one at a time (the
+ * mean room response over all flights first, then each kept flight):
+ * memory of a few flights. Recordings read whole work too. Errors: those
+ * of sasnav_airsas_to_run, the flight reader's and the sink's. */
+int sasnav_airsas_stream(const sasnav_airsas *rec, const sasnav_airsas *background,
+                         const sasnav_airsas_opts *opts, const sasnav_airsas_sink *sink);
 
 #ifdef __cplusplus
 }

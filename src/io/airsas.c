@@ -264,7 +264,10 @@ static int read_waveform(const char *dir, sasnav_airsas *r)
 
 /* Reads Flight-%06d.csv of ping p (0-based). The first flight fixes the
  * number of rows and columns. */
-static int read_flight(const char *dir, int p, sasnav_airsas *r, double **rows, int *cap)
+/* Flight p of `dir` into dst[channel][sample] (NULL: allocate r->samples
+ * for every ping on the first flight and write there). The first flight
+ * read fixes r->n_channels and r->n_samples; the others must match. */
+static int read_flight(const char *dir, int p, sasnav_airsas *r, double **rows, int *cap, float *dst)
 {
     char name[64], path[4096];
     snprintf(name, sizeof name, "Flight-%06d.csv", p + 1);
@@ -310,26 +313,53 @@ static int read_flight(const char *dir, int p, sasnav_airsas *r, double **rows, 
     free(text);
     if (rc) return rc;
     if (n == 0) return sasnav_set_error(SASNAV_ERR_FORMAT, "%s holds no samples", path);
-    if (p == 0) {
+    if (r->n_samples == 0) {
         r->n_samples = n;
-        size_t total = (size_t)r->n_pings * r->n_channels * n;
-        r->samples = malloc(sizeof(float) * total);
-        if (!r->samples) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for %zu samples", total);
+        if (!dst) {
+            size_t total = (size_t)r->n_pings * r->n_channels * n;
+            r->samples = malloc(sizeof(float) * total);
+            if (!r->samples) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for %zu samples", total);
+        }
     } else if (n != r->n_samples) {
         return sasnav_set_error(SASNAV_ERR_FORMAT, "%s has %d rows, Flight-000001.csv has %d", path, n,
                                 r->n_samples);
     }
-    /* transpose rows [sample][channel] into [ping][channel][sample] */
-    for (int c = 0; c < r->n_channels; c++) {
-        float *dst = r->samples + ((size_t)p * r->n_channels + c) * r->n_samples;
-        for (int m = 0; m < n; m++) dst[m] = (float)(*rows)[(size_t)m * r->n_channels + c];
-    }
+    if (!dst) dst = r->samples + (size_t)p * r->n_channels * r->n_samples;
+    /* transpose rows [sample][channel] into [channel][sample] */
+    for (int c = 0; c < r->n_channels; c++)
+        for (int m = 0; m < n; m++) dst[(size_t)c * n + m] = (float)(*rows)[(size_t)m * r->n_channels + c];
     return SASNAV_OK;
+}
+
+/* An opened recording's flight reader (sasnav_airsas_open). */
+typedef struct {
+    char *dir;
+    sasnav_airsas *rec;
+    double *rows;
+    int cap;
+} flight_reader;
+
+static int read_flight_on_demand(void *ctx, int p, float *out)
+{
+    flight_reader *f = ctx;
+    if (p < 0 || p >= f->rec->n_pings)
+        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: flight %d outside 1..%d", p + 1, f->rec->n_pings);
+    return read_flight(f->dir, p, f->rec, &f->rows, &f->cap, out);
+}
+
+static void close_flights(void *ctx)
+{
+    flight_reader *f = ctx;
+    if (!f) return;
+    free(f->dir);
+    free(f->rows);
+    free(f);
 }
 
 void sasnav_airsas_free(sasnav_airsas *rec)
 {
     if (!rec) return;
+    if (rec->close_flights) rec->close_flights(rec->flight_ctx);
     free(rec->samples);
     free(rec->angle_deg);
     free(rec->height_mm);
@@ -337,7 +367,9 @@ void sasnav_airsas_free(sasnav_airsas *rec)
     free(rec);
 }
 
-int sasnav_airsas_read(const char *dir, sasnav_airsas **rec)
+/* sasnav_airsas_read (streamed = 0) or sasnav_airsas_open (1: the first
+ * flight read for the shape only, the others left for read_flight). */
+static int airsas_load(const char *dir, int streamed, sasnav_airsas **rec)
 {
     if (!rec) return sasnav_set_error(SASNAV_ERR_ARG, "airsas: output pointer is NULL");
     *rec = NULL;
@@ -353,8 +385,31 @@ int sasnav_airsas_read(const char *dir, sasnav_airsas **rec)
     if (!rc) rc = read_waveform(dir, r);
     double *rows = NULL;
     int cap = 0;
-    for (int p = 0; !rc && p < r->n_pings; p++) rc = read_flight(dir, p, r, &rows, &cap);
-    free(rows);
+    if (!streamed) {
+        for (int p = 0; !rc && p < r->n_pings; p++) rc = read_flight(dir, p, r, &rows, &cap, NULL);
+        free(rows);
+    } else if (!rc) {
+        flight_reader *f = calloc(1, sizeof *f);
+        if (f) f->dir = strdup(dir);
+        if (!f || !f->dir) {
+            free(f);
+            rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        } else {
+            f->rec = r;
+            r->read_flight = read_flight_on_demand;
+            r->close_flights = close_flights;
+            r->flight_ctx = f;
+            /* The shape, from the first flight, read as if the recording
+             * had one ping (its samples allocated for that ping only, then
+             * dropped: the flights are read again when used). */
+            int n_pings = r->n_pings;
+            r->n_pings = 1;
+            rc = read_flight(dir, 0, r, &f->rows, &f->cap, NULL);
+            r->n_pings = n_pings;
+            free(r->samples);
+            r->samples = NULL;
+        }
+    }
     if (rc) {
         sasnav_airsas_free(r);
         return rc;
@@ -362,3 +417,7 @@ int sasnav_airsas_read(const char *dir, sasnav_airsas **rec)
     *rec = r;
     return SASNAV_OK;
 }
+
+int sasnav_airsas_read(const char *dir, sasnav_airsas **rec) { return airsas_load(dir, 0, rec); }
+
+int sasnav_airsas_open(const char *dir, sasnav_airsas **rec) { return airsas_load(dir, 1, rec); }

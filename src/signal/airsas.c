@@ -26,6 +26,21 @@ void sasnav_airsas_default_opts(sasnav_airsas_opts *opts)
     opts->clip_run = 3;
 }
 
+/* The room removal of one record x (n samples) with the mean cm. */
+static void remove_room_record(int n, const double *cm, float *x)
+{
+    for (int m = 0; m < n; m++) {
+        /* arg of a real number: 0 for >= 0 (numpy's angle(0) = 0), pi below */
+        double arg_cm = cm[m] < 0 ? M_PI : 0.0, arg_ts = x[m] < 0 ? M_PI : 0.0;
+        double dang = sasnav_wrap_angle(arg_cm - arg_ts);
+        double beta = 1.0 / (1.0 + dang * dang);
+        double dmag = fabs(cm[m]) - fabs((double)x[m]);
+        double alpha = 1.0 / (1.0 + dmag * dmag);
+        double sign = x[m] < 0 ? -1.0 : 1.0; /* exp(j arg(ts)) */
+        x[m] = (float)(x[m] - alpha * beta * fabs(cm[m]) * sign);
+    }
+}
+
 int sasnav_airsas_remove_room(int n_pings, int n, float *ts)
 {
     if (!ts || n_pings < 1 || n < 1)
@@ -36,19 +51,7 @@ int sasnav_airsas_remove_room(int n_pings, int n, float *ts)
     for (int p = 0; p < n_pings; p++)
         for (int m = 0; m < n; m++) cm[m] += ts[(size_t)p * n + m];
     for (int m = 0; m < n; m++) cm[m] /= n_pings;
-    for (int p = 0; p < n_pings; p++) {
-        float *x = ts + (size_t)p * n;
-        for (int m = 0; m < n; m++) {
-            /* arg of a real number: 0 for >= 0 (numpy's angle(0) = 0), pi below */
-            double arg_cm = cm[m] < 0 ? M_PI : 0.0, arg_ts = x[m] < 0 ? M_PI : 0.0;
-            double dang = sasnav_wrap_angle(arg_cm - arg_ts);
-            double beta = 1.0 / (1.0 + dang * dang);
-            double dmag = fabs(cm[m]) - fabs((double)x[m]);
-            double alpha = 1.0 / (1.0 + dmag * dmag);
-            double sign = x[m] < 0 ? -1.0 : 1.0; /* exp(j arg(ts)) */
-            x[m] = (float)(x[m] - alpha * beta * fabs(cm[m]) * sign);
-        }
-    }
+    for (int p = 0; p < n_pings; p++) remove_room_record(n, cm, ts + (size_t)p * n);
     free(cm);
     return SASNAV_OK;
 }
@@ -97,31 +100,45 @@ static int background_check(const sasnav_airsas *rec, const sasnav_airsas *bg)
     return SASNAV_OK;
 }
 
-/* Raw records of one microphone, minus the background: ts[p * n + m]. The
- * raw records (and the background's) are checked by the ingest plan first
- * (finite, not clipped). */
-static int gather_records(const sasnav_airsas *rec, const sasnav_airsas *bg, int mic,
-                          const sasnav_ingest *check, float **out)
+/* Scratch of one flight of a recording and of its background, for
+ * recordings opened with sasnav_airsas_open (NULL for one read whole). */
+typedef struct {
+    float *rec, *bg;
+} flight_scratch;
+
+/* The raw record of microphone `mic` (index) of flight p, minus the
+ * background's, into ts (n_samples values). The raw records (and the
+ * background's) are checked by the ingest plan first (finite, not
+ * clipped). */
+static int flight_record(const sasnav_airsas *rec, const sasnav_airsas *bg, int p, int mic,
+                         const sasnav_ingest *check, const flight_scratch *scratch, float *ts)
 {
     size_t n = (size_t)rec->n_samples;
-    float *ts = malloc(sizeof(float) * n * (size_t)rec->n_pings);
-    if (!ts) return sasnav_set_error(SASNAV_ERR_NOMEM, "airsas: out of memory");
-    for (int p = 0; p < rec->n_pings; p++) {
-        const float *x = rec->samples + ((size_t)p * rec->n_channels + mic) * n;
-        const float *b = bg ? bg->samples + ((size_t)p * bg->n_channels + mic) * n : NULL;
-        int rc = sasnav_ingest_check_record(check, 1, x);
-        const char *which = "";
-        if (!rc && b) {
-            rc = sasnav_ingest_check_record(check, 1, b);
-            which = " (background)";
-        }
-        if (rc) {
-            free(ts);
-            return sasnav_prefix_error(rc, "airsas: flight %d%s", p + 1, which);
-        }
-        for (size_t m = 0; m < n; m++) ts[(size_t)p * n + m] = b ? x[m] - b[m] : x[m];
+    const float *x, *b = NULL;
+    int rc = SASNAV_OK;
+    if (rec->samples) {
+        x = rec->samples + ((size_t)p * rec->n_channels + mic) * n;
+    } else {
+        rc = rec->read_flight(rec->flight_ctx, p, scratch->rec);
+        x = scratch->rec + (size_t)mic * n;
     }
-    *out = ts;
+    if (!rc && bg) {
+        if (bg->samples) {
+            b = bg->samples + ((size_t)p * bg->n_channels + mic) * n;
+        } else {
+            rc = bg->read_flight(bg->flight_ctx, p, scratch->bg);
+            b = scratch->bg + (size_t)mic * n;
+        }
+    }
+    if (rc) return rc;
+    rc = sasnav_ingest_check_record(check, 1, x);
+    const char *which = "";
+    if (!rc && b) {
+        rc = sasnav_ingest_check_record(check, 1, b);
+        which = " (background)";
+    }
+    if (rc) return sasnav_prefix_error(rc, "airsas: flight %d%s", p + 1, which);
+    for (size_t m = 0; m < n; m++) ts[m] = b ? x[m] - b[m] : x[m];
     return SASNAV_OK;
 }
 
@@ -156,12 +173,15 @@ static sasnav_ping_pose circle_pose(double radius, double angle_deg)
     return ping;
 }
 
-int sasnav_airsas_to_run(const sasnav_airsas *rec, const sasnav_airsas *background,
-                         const sasnav_airsas_opts *opts, sasnav_run **run)
+static int has_flights(const sasnav_airsas *r) { return r->samples || r->read_flight; }
+
+int sasnav_airsas_stream(const sasnav_airsas *rec, const sasnav_airsas *background,
+                         const sasnav_airsas_opts *opts, const sasnav_airsas_sink *sink)
 {
-    if (!run) return sasnav_set_error(SASNAV_ERR_ARG, "airsas: run output pointer is NULL");
-    *run = NULL;
-    if (!rec || !rec->samples) return sasnav_set_error(SASNAV_ERR_ARG, "airsas: no recording");
+    if (!sink || !sink->begin || !sink->ping) return sasnav_set_error(SASNAV_ERR_ARG, "airsas: no sink");
+    if (!rec || !has_flights(rec)) return sasnav_set_error(SASNAV_ERR_ARG, "airsas: no recording");
+    if (background && !has_flights(background))
+        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: the background holds no flights");
     sasnav_airsas_opts o;
     if (opts)
         o = *opts;
@@ -178,55 +198,122 @@ int sasnav_airsas_to_run(const sasnav_airsas *rec, const sasnav_airsas *backgrou
     sasnav_ingest *plan = NULL;
     rc = make_plan(rec, &o, &plan);
     if (rc) return rc;
-    float *ts = NULL;
-    rc = gather_records(rec, background, o.microphone - 1, plan, &ts);
-    if (!rc && o.remove_room) rc = sasnav_airsas_remove_room(rec->n_pings, rec->n_samples, ts);
+    size_t n = (size_t)rec->n_samples, flight = n * (size_t)rec->n_channels;
+    int mic = o.microphone - 1;
+    flight_scratch scratch = {NULL, NULL};
+    float *ts = malloc(sizeof(float) * n);
+    double *cm = calloc(n, sizeof *cm);
+    sasnav_ping_pose *nav = malloc(sizeof *nav * (size_t)n_keep);
+    if (!rec->samples) scratch.rec = malloc(sizeof(float) * flight);
+    if (background && !background->samples) scratch.bg = malloc(sizeof(float) * flight);
+    sasnav_cfloat *out = NULL;
+    if (!ts || !cm || !nav || (!rec->samples && !scratch.rec) || (background && !background->samples && !scratch.bg))
+        rc = sasnav_set_error(SASNAV_ERR_NOMEM, "airsas: out of memory");
 
-    sasnav_system sys;
-    sasnav_system_default(&sys);
+    /* Pass 1 over every flight of the recording (kept or not): the records
+     * checked, and their mean (the room response). */
+    for (int p = 0; !rc && p < rec->n_pings; p++) {
+        rc = flight_record(rec, background, p, mic, plan, &scratch, ts);
+        for (size_t m = 0; !rc && o.remove_room && m < n; m++) cm[m] += ts[m];
+    }
+    for (size_t m = 0; !rc && o.remove_room && m < n; m++) cm[m] /= rec->n_pings;
+
+    /* The run's header. */
+    sasnav_run hdr;
+    memset(&hdr, 0, sizeof hdr);
+    sasnav_system_default(&hdr.sys);
     double t_mean = 0;
     for (int p = 0; p < rec->n_pings; p++) t_mean += rec->temperature[p];
     t_mean /= rec->n_pings;
-    sys.sound_speed = 331.4 + 0.6 * t_mean;
-    sys.attenuation = SASNAV_ATTEN_NONE;
-    sys.beam_pattern = 0;
-    sasnav_array array;
-    memset(&array, 0, sizeof array);
-    array.n_rx = 1;
+    hdr.sys.sound_speed = 331.4 + 0.6 * t_mean;
+    hdr.sys.attenuation = SASNAV_ATTEN_NONE;
+    hdr.sys.beam_pattern = 0;
+    hdr.array.n_rx = 1;
     double h = rec->height_mm[0] / 1000.0 - rec->center[2];
-    array.tx_height = rec->speaker[2] + h;
-    array.rx_height = rec->mic[o.microphone - 1][2] + h;
-    sasnav_window win;
-    sasnav_run *r = NULL;
-    if (!rc) rc = sasnav_ingest_system(plan, &sys);
-    if (!rc) rc = sasnav_ingest_window(plan, &win);
-    if (!rc) rc = sasnav_run_alloc(&sys, &array, &win, n_keep, 0, &r);
+    hdr.array.tx_height = rec->speaker[2] + h;
+    hdr.array.rx_height = rec->mic[mic][2] + h;
+    if (!rc) rc = sasnav_ingest_system(plan, &hdr.sys);
+    if (!rc) rc = sasnav_ingest_window(plan, &hdr.win);
+    if (!rc) {
+        hdr.n_pings = n_keep;
+        hdr.nav = nav;
+        for (int k = 0; k < n_keep; k++) nav[k] = circle_pose(o.radius, rec->angle_deg[o.first_ping + k * o.ping_stride]);
+        double step = n_keep > 1 ? fabs(rec->angle_deg[o.first_ping + o.ping_stride] - rec->angle_deg[o.first_ping])
+                                 : 0.0;
+        hdr.ping_spacing = o.radius * step * M_PI / 180.0;
+        hdr.speed = 0;
+        hdr.tx_lag = 0;
+        hdr.range_of_interest = o.radius;
+        /* the recording's numbers may still make an invalid run (a Group
+         * Delay that puts the whole window before t = 0, an angle step that
+         * overflows ping_spacing): found by fuzz_airsas_dir, docs/fuzzing.md */
+        rc = sasnav_run_check_header(&hdr);
+        if (rc) rc = sasnav_prefix_error(rc, "airsas");
+    }
+    if (!rc) {
+        out = malloc(sizeof *out * (size_t)hdr.win.n_samples);
+        if (!out) rc = sasnav_set_error(SASNAV_ERR_NOMEM, "airsas: out of memory");
+    }
+    if (!rc) rc = sink->begin(sink->ctx, &hdr);
+
+    /* Pass 2: each kept flight, its room response removed, through the
+     * ingest chain. */
     for (int k = 0; !rc && k < n_keep; k++) {
         int p = o.first_ping + k * o.ping_stride;
-        rc = sasnav_ingest_execute(plan, 1, ts + (size_t)p * rec->n_samples, sasnav_run_ping(r, k));
-        if (rc) rc = sasnav_prefix_error(rc, "airsas: flight %d", p + 1);
-        r->nav[k] = circle_pose(o.radius, rec->angle_deg[p]);
+        rc = flight_record(rec, background, p, mic, plan, &scratch, ts);
+        if (!rc && o.remove_room) remove_room_record((int)n, cm, ts);
+        if (!rc) {
+            rc = sasnav_ingest_execute(plan, 1, ts, out);
+            if (rc) rc = sasnav_prefix_error(rc, "airsas: flight %d", p + 1);
+        }
+        if (!rc) rc = sink->ping(sink->ctx, k, out);
     }
+    free(out);
     free(ts);
+    free(cm);
+    free(nav);
+    free(scratch.rec);
+    free(scratch.bg);
     sasnav_ingest_destroy(plan);
+    return rc;
+}
+
+/* sasnav_airsas_to_run's sink: the run in memory. */
+static int run_begin(void *ctx, const sasnav_run *hdr)
+{
+    sasnav_run **r = ctx;
+    int rc = sasnav_run_alloc(&hdr->sys, &hdr->array, &hdr->win, hdr->n_pings, 0, r);
+    if (rc) return rc;
+    memcpy((*r)->nav, hdr->nav, sizeof *hdr->nav * (size_t)hdr->n_pings);
+    (*r)->ping_spacing = hdr->ping_spacing;
+    (*r)->speed = hdr->speed;
+    (*r)->tx_lag = hdr->tx_lag;
+    (*r)->range_of_interest = hdr->range_of_interest;
+    return SASNAV_OK;
+}
+
+static int run_ping(void *ctx, int k, const sasnav_cfloat *samples)
+{
+    sasnav_run *r = *(sasnav_run **)ctx;
+    memcpy(sasnav_run_ping(r, k), samples, sizeof *samples * sasnav_run_ping_size(r));
+    return SASNAV_OK;
+}
+
+int sasnav_airsas_to_run(const sasnav_airsas *rec, const sasnav_airsas *background,
+                         const sasnav_airsas_opts *opts, sasnav_run **run)
+{
+    if (!run) return sasnav_set_error(SASNAV_ERR_ARG, "airsas: run output pointer is NULL");
+    *run = NULL;
+    sasnav_run *r = NULL;
+    sasnav_airsas_sink sink = {run_begin, run_ping, &r};
+    int rc = sasnav_airsas_stream(rec, background, opts, &sink);
+    if (!rc) {
+        rc = sasnav_run_check(r);
+        if (rc) rc = sasnav_prefix_error(rc, "airsas");
+    }
     if (rc) {
         sasnav_run_free(r);
         return rc;
-    }
-    double step = n_keep > 1 ? fabs(rec->angle_deg[o.first_ping + o.ping_stride] -
-                                    rec->angle_deg[o.first_ping])
-                             : 0.0;
-    r->ping_spacing = o.radius * step * M_PI / 180.0;
-    r->speed = 0;
-    r->tx_lag = 0;
-    r->range_of_interest = o.radius;
-    /* the recording's numbers may still make an invalid run (a Group Delay
-     * that puts the whole window before t = 0, an angle step that overflows
-     * ping_spacing): found by fuzz_airsas_dir, docs/fuzzing.md */
-    rc = sasnav_run_check(r);
-    if (rc) {
-        sasnav_run_free(r);
-        return sasnav_prefix_error(rc, "airsas");
     }
     *run = r;
     return SASNAV_OK;
