@@ -4,8 +4,15 @@
 #include "sasnav/tank.h"
 
 #include <stdio.h>
+#include <unistd.h>
 
 int cmd_ingest_wav(const char *dir, int decimation, double range, const char *output);
+
+static int truth_csv_exists(const char *dir)
+{
+    char path[4096];
+    return snprintf(path, sizeof path, "%s/truth.csv", dir) < (int)sizeof path && access(path, F_OK) == 0;
+}
 
 /* Reads DIR (ping_NNN.wav, chirp.wav, positions.csv, truth.csv if present;
  * see include/sasnav/tank.h), runs the ingest chain (f0 105 kHz, B 30 kHz,
@@ -20,20 +27,14 @@ int cmd_ingest_wav(const char *dir, int decimation, double range, const char *ou
     sasnav_tank_default_read_opts(&o);
     if (decimation >= 1) o.decimation = decimation;
     if (range > 0) o.range_of_interest = range;
-    sasnav_run *run = NULL;
-    int rc = sasnav_tank_read_dir(dir, &o, &run);
-    if (rc) return cli_fail("ingest", rc, "cannot ingest the WAV recording %s", dir);
-    rc = sasnav_run_write(output, run);
-    if (rc) {
-        sasnav_run_free(run);
-        return cli_fail("ingest", rc, "cannot write %s", output);
-    }
+    sasnav_run info;
+    int rc = sasnav_tank_ingest_dir(dir, &o, output, &info); /* ping by ping */
+    if (rc) return cli_fail("ingest", rc, "cannot ingest the WAV recording %s into %s", dir, output);
     fprintf(stderr,
             "sasnav ingest: %d pings x %d channels x %d samples (fs %g kHz, f0 %g kHz, "
             "B %g kHz, c %.1f m/s, truth %s) -> %s\n",
-            run->n_pings, run->array.n_rx, run->win.n_samples, run->sys.sample_rate / 1e3,
-            run->sys.f0 / 1e3, run->sys.bandwidth / 1e3, run->sys.sound_speed,
-            run->truth ? "yes" : "no", output);
-    sasnav_run_free(run);
+            info.n_pings, info.array.n_rx, info.win.n_samples, info.sys.sample_rate / 1e3,
+            info.sys.f0 / 1e3, info.sys.bandwidth / 1e3, info.sys.sound_speed,
+            truth_csv_exists(dir) ? "yes" : "no", output);
     return 0;
 }

@@ -144,6 +144,14 @@ void sasnav_tank_default_read_opts(sasnav_tank_read_opts *o);
  * clipped), SASNAV_ERR_ARG, SASNAV_ERR_NOMEM, SASNAV_ERR_FFT. */
 int sasnav_tank_read_dir(const char *dir, const sasnav_tank_read_opts *o, sasnav_run **run);
 
+/* The same, written to the run file `path` ping by ping as each WAV is
+ * ingested (sasnav_run_writer: the same file as sasnav_run_write of the
+ * run sasnav_tank_read_dir returns; memory of one ping whatever the
+ * recording's length; nothing left at `path` on failure). `info` (may be
+ * NULL) receives the run's header: its shape and constants (raw, nav and
+ * truth NULL). Errors: those of sasnav_tank_read_dir and of the writer. */
+int sasnav_tank_ingest_dir(const char *dir, const sasnav_tank_read_opts *o, const char *path, sasnav_run *info);
+
 #ifdef __cplusplus
 }
 #endif

@@ -5,6 +5,7 @@
 
 #include "sasnav/error.h"
 #include "sasnav/ingest.h"
+#include "sasnav/io.h"
 #include "io/textfile.h"
 
 #include <errno.h>
@@ -276,10 +277,12 @@ static int read_poses_csv(const char *path, sasnav_ping_pose **poses, int *n)
     return SASNAV_OK;
 }
 
-int sasnav_tank_read_dir(const char *dir, const sasnav_tank_read_opts *o_in, sasnav_run **run)
+/* sasnav_tank_read_dir (out_path NULL: the run in memory, *run) or
+ * sasnav_tank_ingest_dir (each ping written to out_path as it is made; the
+ * header in *info). */
+static int tank_ingest(const char *dir, const sasnav_tank_read_opts *o_in, const char *out_path,
+                       sasnav_run **run, sasnav_run *info)
 {
-    if (!run) return sasnav_set_error(SASNAV_ERR_ARG, "tank: run output is NULL");
-    *run = NULL;
     if (!dir || !o_in) return sasnav_set_error(SASNAV_ERR_ARG, "tank: NULL directory or options");
     sasnav_tank_read_opts oc = *o_in;
     const sasnav_tank_read_opts *o = &oc;
@@ -290,8 +293,10 @@ int sasnav_tank_read_dir(const char *dir, const sasnav_tank_read_opts *o_in, sas
     sasnav_ping_pose *nav = NULL, *truth = NULL;
     float *chirp = NULL, *rec = NULL;
     sasnav_ingest *plan = NULL;
-    sasnav_run *r = NULL;
+    sasnav_run *r = NULL, hdr;
+    sasnav_run_writer *writer = NULL;
     int n_pings = 0, n_truth = 0, rc;
+    memset(&hdr, 0, sizeof hdr);
 
     if ((rc = sasnav_path_join(path, sizeof path, dir, "array.csv"))) return rc;
     if (access(path, F_OK) == 0 && (rc = read_array_csv(path, &oc))) return rc;
@@ -356,7 +361,16 @@ int sasnav_tank_read_dir(const char *dir, const sasnav_tank_read_opts *o_in, sas
                 goto done;
             sasnav_window win;
             if ((rc = sasnav_ingest_window(plan, &win))) goto done;
-            if ((rc = sasnav_run_alloc(&sys, &a, &win, n_pings, truth != NULL, &r))) goto done;
+            /* In memory: the whole run. Written: one ping's buffer, and the
+             * writer opened on the run's shape. */
+            if ((rc = sasnav_run_alloc(&sys, &a, &win, out_path ? 1 : n_pings, truth != NULL && !out_path, &r)))
+                goto done;
+            hdr = *r;
+            hdr.n_pings = n_pings;
+            hdr.raw = NULL;
+            hdr.nav = nav;
+            hdr.truth = truth;
+            if (out_path && (rc = sasnav_run_writer_open(out_path, &hdr, &writer))) goto done;
         } else if (nch != n_rx) {
             rc = sasnav_set_error(SASNAV_ERR_FORMAT, "%s has %d channels, ping_000.wav %d", path,
                                   nch, n_rx);
@@ -370,18 +384,35 @@ int sasnav_tank_read_dir(const char *dir, const sasnav_tank_read_opts *o_in, sas
             rc = sasnav_prefix_error(SASNAV_ERR_FORMAT, "%s", path);
             goto done;
         }
-        if ((rc = sasnav_ingest_execute(plan, n_rx, rec, sasnav_run_ping(r, k)))) goto done;
+        if ((rc = sasnav_ingest_execute(plan, n_rx, rec, sasnav_run_ping(r, out_path ? 0 : k)))) goto done;
+        if (out_path && (rc = sasnav_run_writer_put(writer, k, sasnav_run_ping(r, 0)))) goto done;
     }
-    memcpy(r->nav, nav, sizeof *nav * n_pings);
-    if (truth) memcpy(r->truth, truth, sizeof *truth * n_pings);
-    r->ping_spacing = n_pings > 1 ? fabs(nav[n_pings - 1].array.x - nav[0].array.x) / (n_pings - 1)
-                                  : 0.0;
-    r->speed = 0.0;
-    r->tx_lag = 0.0;
-    r->range_of_interest = o->range_of_interest;
-    rc = sasnav_run_check(r);
+    hdr.ping_spacing = n_pings > 1 ? fabs(nav[n_pings - 1].array.x - nav[0].array.x) / (n_pings - 1) : 0.0;
+    hdr.speed = 0.0;
+    hdr.tx_lag = 0.0;
+    hdr.range_of_interest = o->range_of_interest;
+    if (!out_path) {
+        memcpy(r->nav, nav, sizeof *nav * n_pings);
+        if (truth) memcpy(r->truth, truth, sizeof *truth * n_pings);
+        r->ping_spacing = hdr.ping_spacing;
+        r->speed = hdr.speed;
+        r->tx_lag = hdr.tx_lag;
+        r->range_of_interest = hdr.range_of_interest;
+        rc = sasnav_run_check(r);
+    } else {
+        rc = sasnav_run_check_header(&hdr);
+        if (!rc) {
+            rc = sasnav_run_writer_finish(writer, &hdr);
+            writer = NULL;
+        }
+        if (!rc && info) {
+            *info = hdr;
+            info->nav = info->truth = NULL;
+        }
+    }
 done:
-    if (rc) sasnav_run_free(r);
+    if (writer) sasnav_run_writer_abort(writer);
+    if (rc || out_path) sasnav_run_free(r);
     else *run = r;
     sasnav_ingest_destroy(plan);
     free(nav);
@@ -389,4 +420,18 @@ done:
     free(chirp);
     free(rec);
     return rc;
+}
+
+int sasnav_tank_read_dir(const char *dir, const sasnav_tank_read_opts *o, sasnav_run **run)
+{
+    if (!run) return sasnav_set_error(SASNAV_ERR_ARG, "tank: run output is NULL");
+    *run = NULL;
+    return tank_ingest(dir, o, NULL, run, NULL);
+}
+
+int sasnav_tank_ingest_dir(const char *dir, const sasnav_tank_read_opts *o, const char *path, sasnav_run *info)
+{
+    if (!path) return sasnav_set_error(SASNAV_ERR_ARG, "tank: no output file");
+    if (info) memset(info, 0, sizeof *info);
+    return tank_ingest(dir, o, path, NULL, info);
 }
