@@ -29,7 +29,7 @@ int cmd_ingest_wav(const char *dir, int decimation, double range, const char *ou
     if (range > 0) o.range_of_interest = range;
     sasnav_run info;
     int rc = sasnav_tank_ingest_dir(dir, &o, output, &info); /* ping by ping */
-    if (rc) return cli_fail("ingest", rc, "cannot ingest the WAV recording %s into %s", dir, output);
+    if (rc) return cli_fail("ingest", rc, "cannot ingest the WAV recording %s", dir);
     fprintf(stderr,
             "sasnav ingest: %d pings x %d channels x %d samples (fs %g kHz, f0 %g kHz, "
             "B %g kHz, c %.1f m/s, truth %s) -> %s\n",
