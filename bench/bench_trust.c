@@ -134,7 +134,10 @@ int main(int argc, char **argv)
             if (m == M_DPCA) o.method = SASNAV_METHOD_DPCA;
             if (m == M_AID) o.method = SASNAV_METHOD_AIDING;
             if (m == M_SUB) o.speed_lags = speed_lags;
-            if (m == M_FUSED_BIAS) o.aiding_bias_sigma = (sasnav_pose){aiding_bias, aiding_bias, 0};
+            /* fused and aiding without the aiding-bias term (the defaults
+             * before it was on); fused+bias with it (the default since). */
+            o.aiding_bias_sigma = m == M_FUSED_BIAS ? (sasnav_pose){aiding_bias, aiding_bias, 0}
+                                                    : (sasnav_pose){0, 0, 0};
             if (sasnav_navigate(run, &o, &nav[m])) {
                 fprintf(stderr, "navigate (%s, seed %ld): %s\n", names[m], s, sasnav_last_error());
                 return 1;

@@ -180,10 +180,13 @@ typedef struct {
                                  of the aiding per ping interval (surge m,
                                  sway m, yaw rad), estimated jointly with
                                  the motion errors by the smoother: a DVL's
-                                 bias and scale factor at a steady speed
-                                 (e.g. 4e-4 m for 0.2 % + 1 mm/s at 2 m/s
-                                 and 0.1 s), a gyro's bias; 0 = none
-                                 (default) */
+                                 bias and scale factor at a steady speed,
+                                 a gyro's bias; 0 = none. Default 4e-4 m,
+                                 4e-4 m, 0 rad: a DVL of 0.2 % scale factor
+                                 at 2 m/s and 0.1 s per interval (set it to
+                                 your DVL's scale-factor spec x the ping
+                                 step); the fused table of
+                                 docs/navigation.md ("Aiding bias") */
     const sasnav_navigation *reuse; /* a navigation of the same run by the
                                  same method and pair options: its pairs'
                                  first estimates (first_result) are used

@@ -31,7 +31,7 @@ void sasnav_navigate_default_opts(sasnav_navigate_opts *opts)
     opts->eta_weight = 20.0;
     opts->aiding_gate = 5.0;
     opts->speed_lags = 0;
-    opts->aiding_bias_sigma = (sasnav_pose){0, 0, 0};
+    opts->aiding_bias_sigma = (sasnav_pose){4e-4, 4e-4, 0};
     opts->nthreads = 0;
     opts->progress = NULL;
     opts->progress_user = NULL;

@@ -264,7 +264,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       second estimate of every pair: ~1.8x the time)
     --aiding-bias S,W,Y  estimate a constant error of the aiding per ping
                       interval (a DVL's bias and scale factor) with these
-                      standard deviations (m, m, rad; default: none)
+                      standard deviations (m, m, rad; default
+                      0.0004,0.0004,0: a 0.2 % DVL scale factor over a 0.2 m
+                      step; 0,0,0: none)
     --motion-sigma S,W,Y  standard deviations of the change of the motion
                       error from one pair to the next (m, m, rad; default
                       0.01,0.01,0.01)
