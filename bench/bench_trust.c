@@ -10,7 +10,7 @@
  *              jointly (--aiding-bias M, surge and sway, default 4e-4 m)
  *
  * usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE]
- *                    [--speed-lags 0|1|2] [--aiding-bias M]
+ *                    [--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows]
  *
  * Seeds follow `sasnav simulate --seed S --aiding` (scene 3S+1, trajectory
  * 3S+2, noise 3S+3, aiding 3S+4). Prints one line per run and method, then
@@ -23,7 +23,11 @@
  * pair (first estimate: error, eta, margin, verdict, candidates) for the
  * calibration of the verdict. --speed-lags sets opts.speed_lags of the
  * subspace navigation (its estimates are reused by paper and fused);
- * --aiding-bias M sets fused+bias's aiding_bias_sigma (surge and sway, m). */
+ * --aiding-bias M sets fused+bias's aiding_bias_sigma (surge and sway, m).
+ * --lag-rows adds two methods estimated afresh with speed-scaled EPCA
+ * offsets (docs/estimator.md): sub+lags (the pairs' own surge, opts.speed_lags
+ * = 2, no aiding) and fused+lags (the DVL's speed, opts.speed_lags = 1, fused
+ * with the aiding-bias term: fused+bias with the offsets). */
 #include "sasnav/error.h"
 #include "sasnav/navigate.h"
 #include "sasnav/sim.h"
@@ -33,8 +37,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { M_PAPER, M_SUB, M_DPCA, M_AID, M_FUSED, M_FUSED_BIAS, N_METHODS };
-static const char *const names[N_METHODS] = {"paper", "subspace", "dpca", "aiding", "fused", "fused+bias"};
+enum { M_PAPER, M_SUB, M_DPCA, M_AID, M_FUSED, M_FUSED_BIAS, M_SUB_LAGS, M_FUSED_LAGS, N_METHODS };
+static const char *const names[N_METHODS] = {"paper", "subspace", "dpca", "aiding", "fused", "fused+bias",
+                                             "sub+lags", "fused+lags"};
 
 typedef struct {
     double *final_sway, *final_surge, *final_yaw, *rms_sway;
@@ -62,7 +67,7 @@ int main(int argc, char **argv)
 {
     long s0 = 1001, ns = 10;
     double snr = 30.0;
-    int threads = 0, speed_lags = 0;
+    int threads = 0, speed_lags = 0, n_methods = M_SUB_LAGS;
     double aiding_bias = 4e-4;
     const char *pairs_path = NULL;
     for (int a = 1; a < argc; a++) {
@@ -78,11 +83,13 @@ int main(int argc, char **argv)
             aiding_bias = atof(argv[++a]);
         } else if (!strcmp(argv[a], "--speed-lags") && a + 1 < argc) {
             speed_lags = atoi(argv[++a]);
+        } else if (!strcmp(argv[a], "--lag-rows")) {
+            n_methods = N_METHODS;
         } else if (!strcmp(argv[a], "--pairs") && a + 1 < argc) {
             pairs_path = argv[++a];
         } else {
             fprintf(stderr, "usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE] "
-                            "[--speed-lags 0|1|2]\n");
+                            "[--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows]\n");
             return 2;
         }
     }
@@ -122,28 +129,30 @@ int main(int argc, char **argv)
         }
         sasnav_navigation nav[N_METHODS];
         memset(nav, 0, sizeof nav);
-        int order[N_METHODS] = {M_SUB, M_PAPER, M_FUSED, M_FUSED_BIAS, M_DPCA, M_AID};
-        for (int k = 0; k < N_METHODS; k++) {
+        int order[N_METHODS] = {M_SUB, M_PAPER, M_FUSED, M_FUSED_BIAS, M_DPCA, M_AID, M_SUB_LAGS, M_FUSED_LAGS};
+        for (int k = 0; k < n_methods; k++) {
             int m = order[k];
             sasnav_navigate_opts o;
             sasnav_navigate_default_opts(&o);
             o.nthreads = threads;
-            o.use_aiding = m == M_FUSED || m == M_FUSED_BIAS || m == M_AID;
+            o.use_aiding = m == M_FUSED || m == M_FUSED_BIAS || m == M_AID || m == M_FUSED_LAGS;
             o.resolve = m != M_PAPER;
             if (m == M_PAPER || m == M_FUSED || m == M_FUSED_BIAS) o.reuse = &nav[M_SUB];
             if (m == M_DPCA) o.method = SASNAV_METHOD_DPCA;
             if (m == M_AID) o.method = SASNAV_METHOD_AIDING;
             if (m == M_SUB) o.speed_lags = speed_lags;
+            if (m == M_SUB_LAGS) o.speed_lags = 2;
+            if (m == M_FUSED_LAGS) o.speed_lags = 1;
             /* fused and aiding without the aiding-bias term (the defaults
              * before it was on); fused+bias with it (the default since). */
-            o.aiding_bias_sigma = m == M_FUSED_BIAS ? (sasnav_pose){aiding_bias, aiding_bias, 0}
+            o.aiding_bias_sigma = m == M_FUSED_BIAS || m == M_FUSED_LAGS ? (sasnav_pose){aiding_bias, aiding_bias, 0}
                                                     : (sasnav_pose){0, 0, 0};
             if (sasnav_navigate(run, &o, &nav[m])) {
                 fprintf(stderr, "navigate (%s, seed %ld): %s\n", names[m], s, sasnav_last_error());
                 return 1;
             }
         }
-        for (int m = 0; m < N_METHODS; m++) {
+        for (int m = 0; m < n_methods; m++) {
             const sasnav_navigation *nv = &nav[m];
             int slips = 0, unflagged = 0, flagged = 0;
             for (int j = 0; j < nv->n_pairs; j++) {
@@ -187,14 +196,14 @@ int main(int argc, char **argv)
             fflush(pf);
         }
         fflush(stdout);
-        for (int m = 0; m < N_METHODS; m++) sasnav_navigation_free(&nav[m]);
+        for (int m = 0; m < n_methods; m++) sasnav_navigation_free(&nav[m]);
         sasnav_run_free(run);
     }
     if (pf) fclose(pf);
     printf("\n| method | slips | unflagged slips | flagged pairs | final sway mm, median / p95 | "
            "final surge mm | final yaw rad | rms sway mm | runs within lambda/25 |\n"
            "|---|---|---|---|---|---|---|---|---|\n");
-    for (int m = 0; m < N_METHODS; m++) {
+    for (int m = 0; m < n_methods; m++) {
         stats *t = &st[m];
         int n = (int)ns;
         double sw50 = percentile(t->final_sway, n, 50), sw95 = percentile(t->final_sway, n, 95);
