@@ -580,6 +580,14 @@ static void test_trust_point(void)
             }
             CHECK(cn.centroids && !memcmp(cn.centroids, nav.centroids, sizeof *cn.centroids * (size_t)cn.n_pings),
                   "compact: other centroids");
+            /* A packed navigation can be reused in turn (it was refused). */
+            sasnav_navigate_opts orp = o;
+            orp.reuse = &cn;
+            sasnav_navigation rn;
+            CHECK_OK(sasnav_navigate(run, &orp, &rn));
+            CHECK(rn.centroids && !memcmp(rn.centroids, nav.centroids, sizeof *rn.centroids * (size_t)rn.n_pings),
+                  "reuse of a packed navigation: other centroids");
+            sasnav_navigation_free(&rn);
             sasnav_navigation_free(&cn);
         } else {
             CHECK(nav.n_flagged >= 1, "without aiding nothing flagged");

@@ -181,6 +181,9 @@ int main(void)
         sasnav_validate_opts orf = o;
         orf.refine = 1;
         orf.refine_opts.sweeps = 2;
+        /* compact_pairs in the navigation options changes nothing (validate
+         * read the pairs as an array and crashed on packed ones). */
+        orf.nav.compact_pairs = 1;
         sasnav_validation w;
         CHECK_OK(sasnav_validate(run, &orf, &w));
         if (w.n_k == 2) {

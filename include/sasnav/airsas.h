@@ -15,7 +15,10 @@
  * and the circular geometry, giving a sasnav_run in the raw-data layout.
  *
  * Threads: the functions share no state and use no OpenMP; distinct objects
- * may be used from different threads. sasnav_airsas_to_run makes an ingest
+ * may be used from different threads. A recording opened with
+ * sasnav_airsas_open reads its flights through scratch space of its own:
+ * one such recording (or background) is used by one call at a time.
+ * sasnav_airsas_to_run makes an ingest
  * plan (FFTW planning under the lock of op.h); sasnav_airsas_read only reads
  * text files.
  */

@@ -262,8 +262,6 @@ static int read_waveform(const char *dir, sasnav_airsas *r)
 
 /* -------------------------------------------------------------- flights */
 
-/* Reads Flight-%06d.csv of ping p (0-based). The first flight fixes the
- * number of rows and columns. */
 /* Flight p of `dir` into dst[channel][sample] (NULL: allocate r->samples
  * for every ping on the first flight and write there). The first flight
  * read fixes r->n_channels and r->n_samples; the others must match. */

@@ -373,7 +373,8 @@ static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: aiding bias standard deviations must be finite and >= 0");
     if (o->speed_lags < 0 || o->speed_lags > 2)
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: speed_lags must be 0, 1 or 2");
-    if (o->reuse && (o->reuse->method != o->method || o->reuse->n_pings != run->n_pings || !o->reuse->pairs))
+    if (o->reuse && (o->reuse->method != o->method || o->reuse->n_pings != run->n_pings ||
+                     (!o->reuse->pairs && !o->reuse->packed)))
         return sasnav_set_error(SASNAV_ERR_ARG,
                                 "navigate: the navigation to reuse is of another method or run");
     if (o->n_done < 0 || (o->n_done > 0 && !o->done))

@@ -60,14 +60,22 @@ static const unsigned char *get_result(const unsigned char *s, sasnav_pair_resul
     return get_bytes(s, r, RES_TAIL, sizeof *r - RES_TAIL);
 }
 
+/* The layout relies on the order of the fields: result before first_result,
+ * n_candidates before candidates. */
+_Static_assert(offsetof(sasnav_navigate_pair, result) < offsetof(sasnav_navigate_pair, first_result),
+               "pair_store: result must precede first_result");
+_Static_assert(offsetof(sasnav_pair_result, n_candidates) < offsetof(sasnav_pair_result, candidates),
+               "pair_store: n_candidates must precede candidates");
+
 /* The three segments of a pair around its two results. */
 static const size_t seg_off[3] = {0, PAIR_RES + sizeof(sasnav_pair_result),
                                   PAIR_FIRST + sizeof(sasnav_pair_result)};
 static const size_t seg_len[3] = {PAIR_RES, PAIR_FIRST - (PAIR_RES + sizeof(sasnav_pair_result)),
                                   sizeof(sasnav_navigate_pair) - (PAIR_FIRST + sizeof(sasnav_pair_result))};
 
-/* How the first result differs from the final one. Compared field by
- * field through a copy (padding bytes of copies may differ). */
+/* How the first result differs from the final one. Compared as packed
+ * bytes, padding included: results equal but for their padding bytes are
+ * stored in full (more space, the same values read back). */
 static int first_kind(const sasnav_navigate_pair *np)
 {
     sasnav_pair_result a;
@@ -137,8 +145,9 @@ int pair_store_put(pair_store *s, int j, const sasnav_navigate_pair *np)
     if (kind == FIRST_FULL) size += result_size(&np->first_result);
     /* In place when it fits; a new blob has room for the first result's
      * displacement, which the smoother nearly always adds. The space of a
-     * blob that grows beyond its capacity is not reused (rare: a pair
-     * estimated again). */
+     * blob that grows beyond its capacity is not reused (a pair estimated
+     * again: rare, except with opts.speed_lags = 2, whose second pass
+     * re-estimates every ok pair). */
     unsigned char *b = s->blob[j];
     uint32_t cap = 0;
     if (b) memcpy(&cap, b - sizeof cap, sizeof cap);

@@ -594,7 +594,11 @@ int sasnav_refine_windows(const sasnav_run *run, const sasnav_ping_pose *nav_in,
             rc = sasnav_run_subset(run, pings, W, NULL, 0, &sub);
             r = sub;
         }
-        if (!rc) rc = sasnav_refine(r, nav_in + s, opts, wout, &wrep);
+        if (!rc) {
+            rc = sasnav_refine(r, nav_in + s, opts, wout, &wrep);
+            /* its pings are numbered from the window's first */
+            if (rc && !whole) sasnav_prefix_error(rc, "window of pings %d-%d", s, s + W - 1);
+        }
         sasnav_run_free(sub);
         if (rc) break;
         if (whole) {

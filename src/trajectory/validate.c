@@ -62,6 +62,7 @@ static int navigate_phase(const sasnav_run *run, const sasnav_validate_opts *o, 
     int rc = sasnav_run_subset(run, idx, m, NULL, 0, &sub);
     sasnav_navigate_opts no = o->nav;
     no.align = 0;
+    no.compact_pairs = 0; /* the pairs are read directly below */
     sasnav_navigation nav;
     memset(&nav, 0, sizeof nav);
     if (!rc) rc = sasnav_navigate(sub, &no, &nav);

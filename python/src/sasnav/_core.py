@@ -796,7 +796,9 @@ _METHODS = {"subspace": 0, "dpca": 1, "aiding": 2}
 _METHOD_NAMES = {v: k for k, v in _METHODS.items()}
 _SPEED_LAGS = {"none": 0, "dvl": 1, "pairs": 2}
 _ENUMS = {"norm": _NORMS, "method": _METHODS, "speed_lags": _SPEED_LAGS}
-_NOT_SETTABLE = {"reuse", "progress", "progress_user"}
+# compact_pairs: the Python navigation reads `pairs` directly (packed pairs
+# save memory on long runs, where open_run's navigate_part serves).
+_NOT_SETTABLE = {"reuse", "progress", "progress_user", "compact_pairs", "done", "n_done"}
 
 
 def _set_fields(struct, opts, what):
