@@ -11,7 +11,7 @@
  *
  * usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE]
  *                    [--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows]
- *                    [--fused-lags]
+ *                    [--fused-lags] [--sub-lags]
  *
  * Seeds follow `sasnav simulate --seed S --aiding` (scene 3S+1, trajectory
  * 3S+2, noise 3S+3, aiding 3S+4). Prints one line per run and method, then
@@ -29,7 +29,7 @@
  * offsets (docs/estimator.md): sub+lags (the pairs' own surge, opts.speed_lags
  * = 2, no aiding) and fused+lags (the DVL's speed, opts.speed_lags = 1, fused
  * with the aiding-bias term: fused+bias with the offsets); --fused-lags adds
- * fused+lags only. */
+ * fused+lags only, --sub-lags sub+lags only. */
 #include "sasnav/error.h"
 #include "sasnav/navigate.h"
 #include "sasnav/sim.h"
@@ -69,7 +69,7 @@ int main(int argc, char **argv)
 {
     long s0 = 1001, ns = 10;
     double snr = 30.0;
-    int threads = 0, speed_lags = 0, n_methods = M_SUB_LAGS, skip_sub_lags = 0;
+    int threads = 0, speed_lags = 0, n_methods = M_SUB_LAGS, skip_sub_lags = 0, skip_fused_lags = 0;
     double aiding_bias = 4e-4;
     const char *pairs_path = NULL;
     for (int a = 1; a < argc; a++) {
@@ -88,14 +88,20 @@ int main(int argc, char **argv)
         } else if (!strcmp(argv[a], "--lag-rows")) {
             n_methods = N_METHODS;
             skip_sub_lags = 0;
+            skip_fused_lags = 0;
         } else if (!strcmp(argv[a], "--fused-lags")) {
             n_methods = N_METHODS;
             skip_sub_lags = 1;
+            skip_fused_lags = 0;
+        } else if (!strcmp(argv[a], "--sub-lags")) {
+            n_methods = N_METHODS;
+            skip_sub_lags = 0;
+            skip_fused_lags = 1;
         } else if (!strcmp(argv[a], "--pairs") && a + 1 < argc) {
             pairs_path = argv[++a];
         } else {
             fprintf(stderr, "usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE] "
-                            "[--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows] [--fused-lags]\n");
+                            "[--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows] [--fused-lags] [--sub-lags]\n");
             return 2;
         }
     }
@@ -138,7 +144,7 @@ int main(int argc, char **argv)
         int order[N_METHODS] = {M_SUB, M_PAPER, M_FUSED, M_FUSED_BIAS, M_DPCA, M_AID, M_SUB_LAGS, M_FUSED_LAGS};
         for (int k = 0; k < n_methods; k++) {
             int m = order[k];
-            if (m == M_SUB_LAGS && skip_sub_lags) continue;
+            if ((m == M_SUB_LAGS && skip_sub_lags) || (m == M_FUSED_LAGS && skip_fused_lags)) continue;
             sasnav_navigate_opts o;
             sasnav_navigate_default_opts(&o);
             o.nthreads = threads;
@@ -160,7 +166,7 @@ int main(int argc, char **argv)
             }
         }
         for (int m = 0; m < n_methods; m++) {
-            if (m == M_SUB_LAGS && skip_sub_lags) continue;
+            if ((m == M_SUB_LAGS && skip_sub_lags) || (m == M_FUSED_LAGS && skip_fused_lags)) continue;
             const sasnav_navigation *nv = &nav[m];
             int slips = 0, unflagged = 0, flagged = 0;
             for (int j = 0; j < nv->n_pairs; j++) {
@@ -212,7 +218,7 @@ int main(int argc, char **argv)
            "final surge mm | final yaw rad | rms sway mm | runs within lambda/25 |\n"
            "|---|---|---|---|---|---|---|---|---|\n");
     for (int m = 0; m < n_methods; m++) {
-        if (m == M_SUB_LAGS && skip_sub_lags) continue;
+        if ((m == M_SUB_LAGS && skip_sub_lags) || (m == M_FUSED_LAGS && skip_fused_lags)) continue;
         stats *t = &st[m];
         int n = (int)ns;
         double sw50 = percentile(t->final_sway, n, 50), sw95 = percentile(t->final_sway, n, 95);
