@@ -7,7 +7,12 @@
  *   aiding     the gyro and DVL alone (dead reckoning)
  *   fused      subspace + aiding (the pair estimates of 'subspace' reused)
  *   fused+bias the same with a constant aiding error per interval estimated
- *              jointly (--aiding-bias M, surge and sway, default 4e-4 m)
+ *              jointly (--aiding-bias M, surge and sway, default 4e-4 m):
+ *              the default fusion before the DVL's speed-scaled offsets
+ * and with --lag-rows / --fused-lags / --sub-lags (below) the rows
+ *   sub+lags   subspace with the pairs' speed-scaled offsets (opts.speed_lags 2)
+ *   fused+lags fused+bias estimated afresh with the DVL's speed-scaled
+ *              offsets (opts.speed_lags 1): the default fusion
  *
  * usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE]
  *                    [--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows]
@@ -153,7 +158,9 @@ int main(int argc, char **argv)
             if (m == M_PAPER || m == M_FUSED || m == M_FUSED_BIAS) o.reuse = &nav[M_SUB];
             if (m == M_DPCA) o.method = SASNAV_METHOD_DPCA;
             if (m == M_AID) o.method = SASNAV_METHOD_AIDING;
-            if (m == M_SUB) o.speed_lags = speed_lags;
+            /* The rows that reuse M_SUB's estimates keep its offsets in
+             * their re-estimates (0 unless --speed-lags). */
+            o.speed_lags = m == M_SUB ? speed_lags : 0;
             if (m == M_SUB_LAGS) o.speed_lags = 2;
             if (m == M_FUSED_LAGS) o.speed_lags = 1;
             /* fused and aiding without the aiding-bias term (the defaults

@@ -170,12 +170,15 @@ typedef struct {
                                  vehicle's speed at each ping (the offset is
                                  speed x two-way delay; docs/estimator.md,
                                  "Where the yaw errors come from"): 0 = the
-                                 run's tx_lag for every ping (default);
-                                 1 = from the DVL aiding when the run has it
-                                 (no extra cost); 2 = the same, and without
-                                 a DVL from the pairs' first estimates of
-                                 surge, every ok pair then estimated again
-                                 (local stages: about 1.8x the time) */
+                                 run's tx_lag for every ping; 1 (default) =
+                                 from the DVL aiding when the run has it and
+                                 use_aiding is on (no extra cost; otherwise
+                                 as 0); 2 = the same, and without a DVL
+                                 from the pairs' first estimates of surge,
+                                 every ok pair then estimated again (local
+                                 stages: about 1.8x the time; not with
+                                 reuse). The re-estimates of a reused
+                                 navigation take the DVL's offsets too */
     sasnav_pose aiding_bias_sigma; /* standard deviation of a constant error
                                  of the aiding per ping interval (surge m,
                                  sway m, yaw rad), estimated jointly with

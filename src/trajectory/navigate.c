@@ -30,7 +30,7 @@ void sasnav_navigate_default_opts(sasnav_navigate_opts *opts)
     opts->motion_sigma = (sasnav_pose){0.01, 0.01, 0.01};
     opts->eta_weight = 20.0;
     opts->aiding_gate = 5.0;
-    opts->speed_lags = 0;
+    opts->speed_lags = 1;
     opts->aiding_bias_sigma = (sasnav_pose){4e-4, 4e-4, 0};
     opts->nthreads = 0;
     opts->progress = NULL;
@@ -1016,7 +1016,7 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
     if (!out->centroids || !out->nav) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     const sasnav_navigate_opts *o = ctx->opts;
     int dvl = run->aiding && run->aiding->velocity && o->use_aiding;
-    if (o->speed_lags && o->method == SASNAV_METHOD_SUBSPACE && dvl && !o->reuse) {
+    if (o->speed_lags && o->method == SASNAV_METHOD_SUBSPACE && dvl) {
         ctx->lags = malloc(sizeof(double) * (size_t)n);
         if (!ctx->lags) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
         speed_lags(ctx, 1, ctx->lags);

@@ -258,8 +258,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --no-resolve      take each pair's own estimate (no joint resolution, no
                       fusion: the paper's method)
     --speed-lags M    per-ping EPCA Tx-array offsets scaled by the speed at
-                      each ping: none (default: the run's offset), dvl (from
-                      the aiding's DVL, no extra cost), pairs (the DVL, or
+                      each ping: none (the run's offset), dvl (default:
+                      from the aiding's DVL when the run has one, no
+                      extra cost; otherwise none), pairs (the DVL, or
                       without one the pairs' first surge estimates and a
                       second estimate of every pair: ~1.8x the time)
     --aiding-bias S,W,Y  estimate a constant error of the aiding per ping

@@ -1191,7 +1191,7 @@ def navigate(run, *, pair=None, dpca=None, progress=None, done=None, **opts):
     (navigate.h) by name: method
     ("subspace", "dpca", "aiding"), long_baselines, align, resolve,
     use_aiding, motion_sigma=(s, w, y), link_sigma, long_sigma, eta_weight,
-    aiding_gate, speed_lags ("none", "dvl", "pairs"), aiding_bias_sigma,
+    aiding_gate, speed_lags ("none", "dvl" (default), "pairs"), aiding_bias_sigma,
     threads (= nthreads); any other keyword that names a field of
     sasnav_pair_opts (k, i, yaw_sigma, fix_yaw, ...) goes to the subspace
     estimator, as do the entries of the dict `pair`; `dpca` is a dict of
