@@ -74,7 +74,8 @@ int main(int argc, char **argv)
 {
     long s0 = 1001, ns = 10;
     double snr = 30.0;
-    int threads = 0, speed_lags = 0, n_methods = M_SUB_LAGS, skip_sub_lags = 0, skip_fused_lags = 0;
+    int threads = 0, speed_lags = 0;
+    int use[N_METHODS] = {1, 1, 1, 1, 1, 1, 0, 0}; /* the methods run */
     double aiding_bias = 4e-4;
     const char *pairs_path = NULL;
     for (int a = 1; a < argc; a++) {
@@ -91,17 +92,11 @@ int main(int argc, char **argv)
         } else if (!strcmp(argv[a], "--speed-lags") && a + 1 < argc) {
             speed_lags = atoi(argv[++a]);
         } else if (!strcmp(argv[a], "--lag-rows")) {
-            n_methods = N_METHODS;
-            skip_sub_lags = 0;
-            skip_fused_lags = 0;
+            use[M_SUB_LAGS] = use[M_FUSED_LAGS] = 1;
         } else if (!strcmp(argv[a], "--fused-lags")) {
-            n_methods = N_METHODS;
-            skip_sub_lags = 1;
-            skip_fused_lags = 0;
+            use[M_FUSED_LAGS] = 1;
         } else if (!strcmp(argv[a], "--sub-lags")) {
-            n_methods = N_METHODS;
-            skip_sub_lags = 0;
-            skip_fused_lags = 1;
+            use[M_SUB_LAGS] = 1;
         } else if (!strcmp(argv[a], "--pairs") && a + 1 < argc) {
             pairs_path = argv[++a];
         } else {
@@ -147,9 +142,9 @@ int main(int argc, char **argv)
         sasnav_navigation nav[N_METHODS];
         memset(nav, 0, sizeof nav);
         int order[N_METHODS] = {M_SUB, M_PAPER, M_FUSED, M_FUSED_BIAS, M_DPCA, M_AID, M_SUB_LAGS, M_FUSED_LAGS};
-        for (int k = 0; k < n_methods; k++) {
+        for (int k = 0; k < N_METHODS; k++) {
             int m = order[k];
-            if ((m == M_SUB_LAGS && skip_sub_lags) || (m == M_FUSED_LAGS && skip_fused_lags)) continue;
+            if (!use[m]) continue;
             sasnav_navigate_opts o;
             sasnav_navigate_default_opts(&o);
             o.nthreads = threads;
@@ -172,8 +167,8 @@ int main(int argc, char **argv)
                 return 1;
             }
         }
-        for (int m = 0; m < n_methods; m++) {
-            if ((m == M_SUB_LAGS && skip_sub_lags) || (m == M_FUSED_LAGS && skip_fused_lags)) continue;
+        for (int m = 0; m < N_METHODS; m++) {
+            if (!use[m]) continue;
             const sasnav_navigation *nv = &nav[m];
             int slips = 0, unflagged = 0, flagged = 0;
             for (int j = 0; j < nv->n_pairs; j++) {
@@ -217,15 +212,15 @@ int main(int argc, char **argv)
             fflush(pf);
         }
         fflush(stdout);
-        for (int m = 0; m < n_methods; m++) sasnav_navigation_free(&nav[m]);
+        for (int m = 0; m < N_METHODS; m++) sasnav_navigation_free(&nav[m]);
         sasnav_run_free(run);
     }
     if (pf) fclose(pf);
     printf("\n| method | slips | unflagged slips | flagged pairs | final sway mm, median / p95 | "
            "final surge mm | final yaw rad | rms sway mm | runs within lambda/25 |\n"
            "|---|---|---|---|---|---|---|---|---|\n");
-    for (int m = 0; m < n_methods; m++) {
-        if ((m == M_SUB_LAGS && skip_sub_lags) || (m == M_FUSED_LAGS && skip_fused_lags)) continue;
+    for (int m = 0; m < N_METHODS; m++) {
+        if (!use[m]) continue;
         stats *t = &st[m];
         int n = (int)ns;
         double sw50 = percentile(t->final_sway, n, 50), sw95 = percentile(t->final_sway, n, 95);
@@ -236,10 +231,12 @@ int main(int argc, char **argv)
                "%d of %d |\n",
                names[m], t->slips, t->pairs, t->unflagged, t->flagged, 1e3 * sw50, 1e3 * sw95,
                1e3 * su50, 1e3 * su95, y50, y95, 1e3 * r50, 1e3 * r95, t->within, n);
-        free(t->final_sway);
-        free(t->final_surge);
-        free(t->final_yaw);
-        free(t->rms_sway);
+    }
+    for (int m = 0; m < N_METHODS; m++) {
+        free(st[m].final_sway);
+        free(st[m].final_surge);
+        free(st[m].final_yaw);
+        free(st[m].rms_sway);
     }
     return 0;
 }
