@@ -1,5 +1,7 @@
 /* T^H is the adjoint of T (SPEC 5): |<T x, y> - <x, T^H y>| <= 1e-5 ||T x|| ||y||
- * on random x, y, for the paper-pair geometry and a rotated bistatic 3-D one,
+ * on random x, y, for the paper-pair geometry, a rotated bistatic 3-D one and
+ * a layout of channels with transmitters of their own (three pings of a
+ * three-channel array as one virtual ping, sasnav_op_set_channels),
  * for every stored tap count and both adjoint loop orders (small and large
  * grids); results independent of the thread count; the
  * accumulating adjoint; and the operator's input checks.
@@ -58,6 +60,8 @@ typedef struct {
     sasnav_array array;
     sasnav_window win;
     sasnav_ping_pose ping;
+    sasnav_ping_pose chan[SASNAV_MAX_RX]; /* per-channel poses when per_channel */
+    int per_channel;
     int np;
     double *x, *y;
 } setup;
@@ -128,6 +132,30 @@ static void rotated_bistatic(setup *s)
     make_points(s, 33, 29, 0.02, 1.0 - 8.0 * sin(0.3), -0.5 + 8.0 * cos(0.3), 0.3, 3);
 }
 
+/* Channels as Tx-Rx pairs: three pings of a 3-channel bistatic array along
+ * a curved path (yaw and Tx pose changing from ping to ping), heights, as
+ * one 9-channel virtual ping. */
+static void channel_layout(setup *s)
+{
+    rotated_bistatic(s);
+    s->name = "channel layout";
+    sasnav_array a;
+    sasnav_array_uniform(&a, 3, 0.06, 0.04, 0.08);
+    a.rx_height = 0.5;
+    a.tx_height = 0.8;
+    s->array = a;
+    s->array.n_rx = 9;
+    for (int j = 0; j < 3; j++)
+        for (int l = 0; l < 3; l++) {
+            s->array.rx_u[3 * j + l] = a.rx_u[l];
+            sasnav_pose tx = {0.9 + 0.07 * j, -0.55 + 0.004 * j * j, 0.22 + 0.01 * j};
+            sasnav_pose arr = {1.1 + 0.07 * j, -0.45 + 0.003 * j * j, 0.3 + 0.012 * j};
+            s->chan[3 * j + l].tx = tx;
+            s->chan[3 * j + l].array = arr;
+        }
+    s->per_channel = 1;
+}
+
 static void free_setup(setup *s)
 {
     free(s->x);
@@ -143,7 +171,8 @@ static sasnav_op *make_op(const setup *s, double tol, double sigma, int nthreads
     o.nthreads = nthreads;
     sasnav_op *op = NULL;
     CHECK_OK(sasnav_op_create(&s->sys, &s->array, &s->win, s->np, s->x, s->y, &o, &op));
-    if (op) CHECK_OK(sasnav_op_set_geometry(op, &s->ping));
+    if (op) CHECK_OK(s->per_channel ? sasnav_op_set_channels(op, s->chan)
+                                     : sasnav_op_set_geometry(op, &s->ping));
     return op;
 }
 
@@ -222,6 +251,50 @@ static void check_threads(const setup *s)
     sasnav_op_destroy(op2);
 }
 
+/* Every channel with the ping's pose: set_channels gives set_geometry's
+ * numbers bit for bit (the one-Tx case is one run of channels); a channel
+ * moved changes that channel's data only. */
+static void check_channels_match(const setup *s)
+{
+    sasnav_op *a = make_op(s, 1e-6, 2.0, 0), *b = make_op(s, 1e-6, 2.0, 0);
+    if (!a || !b) return;
+    sasnav_ping_pose ch[SASNAV_MAX_RX];
+    for (int l = 0; l < s->array.n_rx; l++) ch[l] = s->ping;
+    CHECK_OK(sasnav_op_set_channels(b, ch));
+    size_t np = (size_t)s->np, ns = (size_t)s->win.n_samples, nd = (size_t)s->array.n_rx * ns;
+    sasnav_cfloat *x = malloc(np * sizeof *x), *da = malloc(nd * sizeof *da);
+    sasnav_cfloat *db = malloc(nd * sizeof *db), *ra = malloc(np * sizeof *ra);
+    sasnav_cfloat *rb = malloc(np * sizeof *rb);
+    random_vector(x, np);
+    CHECK_OK(sasnav_op_forward(a, x, da));
+    CHECK_OK(sasnav_op_forward(b, x, db));
+    CHECK_OK(sasnav_op_adjoint(a, da, ra));
+    CHECK_OK(sasnav_op_adjoint(b, da, rb));
+    CHECK(!memcmp(da, db, nd * sizeof *da) && !memcmp(ra, rb, np * sizeof *ra),
+          "%s: set_channels with the ping's pose = set_geometry, bit for bit", s->name);
+    /* Channel 2's transmitter 5 cm away: only channel 2 changes. */
+    ch[2].tx.x += 0.05;
+    CHECK_OK(sasnav_op_set_channels(b, ch));
+    CHECK_OK(sasnav_op_forward(b, x, db));
+    int others_same = 1;
+    double moved = 0;
+    for (int l = 0; l < s->array.n_rx; l++)
+        for (size_t m = 0; m < ns; m++) {
+            size_t i = (size_t)l * ns + m;
+            if (l == 2) moved = fmax(moved, cabsf(da[i] - db[i]));
+            else others_same &= da[i] == db[i];
+        }
+    CHECK(others_same && moved > 1e-3 * norm2(da, nd) / sqrt((double)nd),
+          "%s: one channel's Tx moved changes that channel alone (change %g)", s->name, moved);
+    free(x);
+    free(da);
+    free(db);
+    free(ra);
+    free(rb);
+    sasnav_op_destroy(a);
+    sasnav_op_destroy(b);
+}
+
 static void check_bad_inputs(void)
 {
     sasnav_system sys;
@@ -272,6 +345,17 @@ static void check_bad_inputs(void)
     ping.array.theta = NAN;
     CHECK(sasnav_op_set_geometry(op, &ping) == SASNAV_ERR_ARG, "NaN pose");
     CHECK(sasnav_op_set_geometry(op, NULL) == SASNAV_ERR_ARG, "NULL pose");
+    CHECK(sasnav_op_set_channels(op, NULL) == SASNAV_ERR_ARG, "NULL channel poses");
+    sasnav_ping_pose chans[4] = {{{0, 0, 0}, {0, 0, 0}}, {{0, 0, 0}, {0, 0, 0}},
+                                 {{0, 0, 0}, {0, 0, 0}}, {{0, 0, 0}, {0, 0, 0}}};
+    chans[3].tx.y = NAN;
+    CHECK(sasnav_op_set_channels(op, chans) == SASNAV_ERR_ARG &&
+              strstr(sasnav_last_error(), "channel 3"),
+          "NaN pose of channel 3: %s", sasnav_last_error());
+    chans[3].tx = (sasnav_pose){0.0, 10.0, 0.0}; /* channel 3's Tx on point 0 */
+    CHECK(sasnav_op_set_channels(op, chans) == SASNAV_ERR_GEOMETRY &&
+              strstr(sasnav_last_error(), "Tx of channel 3"),
+          "point on channel 3's Tx: %s", sasnav_last_error());
     /* A point on a receiver (Rx 3 at u = +0.075) and on the Tx. */
     sasnav_ping_pose on_rx = {{0, 0, 0}, {0.1 - 0.075, 10.0, 0.0}};
     CHECK(sasnav_op_set_geometry(op, &on_rx) == SASNAV_ERR_GEOMETRY, "point on a receiver: %s",
@@ -291,11 +375,12 @@ static void check_bad_inputs(void)
 
 int main(void)
 {
-    setup s[3];
+    setup s[4];
     memset(s, 0, sizeof s);
     paper_pair(&s[0]);
     rotated_bistatic(&s[1]);
     paper_pair_large(&s[2]);
+    channel_layout(&s[3]);
     /* Tolerances covering every stored tap count (4, 8, 12, 16) and three
      * oversampling factors. */
     static const double tols[4] = {1e-3, 1e-6, 1e-9, 1e-12};
@@ -308,7 +393,11 @@ int main(void)
     check_adjoint(&s[2], 1e-6, 2.0);
     check_adjoint(&s[2], 1e-9, 2.0);
     check_threads(&s[2]);
+    for (int t = 0; t < 4; t++) check_adjoint(&s[3], tols[t], 2.0);
+    check_threads(&s[3]);
+    check_channels_match(&s[0]);
+    check_channels_match(&s[1]);
     check_bad_inputs();
-    for (int k = 0; k < 3; k++) free_setup(&s[k]);
+    for (int k = 0; k < 4; k++) free_setup(&s[k]);
     return test_summary("test_op_adjoint");
 }

@@ -236,6 +236,21 @@ int sasnav_pair_set_data_lags(sasnav_pair *pair, const sasnav_cfloat *data_p,
                               const sasnav_cfloat *data_q, sasnav_pose nominal, double lag_p,
                               double lag_q);
 
+/* The same for pings whose channels are Tx-Rx pairs of their own
+ * (sasnav_op_set_channels; a virtual array of consecutive pings,
+ * sasnav_virtual_ping): channels_p[l] and channels_q[l] (n_rx each, the
+ * estimator's array) are channel l's Tx and array poses in its ping's
+ * centroid frame (the centroid of the channels' phase centres for a
+ * virtual ping). They replace the EPCA model. The search's phase-centre
+ * spacing becomes the layout's (extent of p's phase centres over n_rx -
+ * 1); the yaw box and pixel defaults still come from the array, so set
+ * opts.box and opts.pixel for such layouts. Errors: as set_data, a
+ * non-finite pose. */
+int sasnav_pair_set_data_channels(sasnav_pair *pair, const sasnav_cfloat *data_p,
+                                  const sasnav_cfloat *data_q, sasnav_pose nominal,
+                                  const sasnav_ping_pose *channels_p,
+                                  const sasnav_ping_pose *channels_q);
+
 /* Evaluates zeta and eta at a hypothesised MOTION ERROR (displacement =
  * nominal + error). level 0: coarse pixels, coarse (k, i); level 1: full
  * pixels, coarse (k, i); level 2: full pixels, final (k, i). blurred != 0

@@ -98,6 +98,17 @@ int sasnav_op_set_points(sasnav_op *op, int n_points, const double *x, const dou
  * Returns SASNAV_ERR_GEOMETRY if a point coincides with a sensor. */
 int sasnav_op_set_geometry(sasnav_op *op, const sasnav_ping_pose *ping);
 
+/* Channels as Tx-Rx pairs (docs/model.md, "Channel layouts"): channel l is
+ * receiver l of the array (rx_u[l] along the axis of channels[l].array)
+ * with its own transmitter channels[l].tx; n_rx entries. Lengths and
+ * heights are the array's. Every channel with the same pose gives exactly
+ * set_geometry's result (the one-Tx, N-Rx ping); a virtual array made of K
+ * pings of a SISO or SIMO sonar is K groups of channels, each group with
+ * its ping's poses (sasnav_virtual_ping, virtual.h). Consecutive channels
+ * that share a Tx pose share its range computation. Errors as
+ * set_geometry, naming the channel. */
+int sasnav_op_set_channels(sasnav_op *op, const sasnav_ping_pose *channels);
+
 /* data[l * n_samples + m] = (T rho)_l(t_m). data has n_rx * n_samples entries,
  * rho has n_points entries. */
 int sasnav_op_forward(sasnav_op *op, const sasnav_cfloat *rho, sasnav_cfloat *data);

@@ -33,6 +33,7 @@
 #include "sasnav/dpca.h"
 #include "sasnav/trajectory.h"
 #include "sasnav/navigate.h"
+#include "sasnav/virtual.h"
 #include "sasnav/refine.h"
 #include "sasnav/validate.h"
 #include "sasnav/tank.h"

@@ -28,9 +28,10 @@ typedef enum {
                                  ripple parameters' rectangle */
 } sasnav_scene_kind;
 
-/* Trajectory model: a nominal straight track along +x at y = 0 and smooth
- * random motion errors (surge, sway, yaw) of the vehicle, plus optionally an
- * explicit error of ping `pair_q` relative to ping `pair_q - 1`. */
+/* Trajectory model: a nominal straight track along +x at y = 0 (or a
+ * circle, circle_radius) and smooth random motion errors (surge, sway, yaw)
+ * of the vehicle in its own frame, plus optionally an explicit error of
+ * ping `pair_q` relative to ping `pair_q - 1`. */
 typedef struct {
     int n_pings;
     double ping_spacing;     /* m, nominal (default 0.20) */
@@ -44,6 +45,12 @@ typedef struct {
     int pair_q;
     sasnav_pose pair_error;  /* surge, sway, yaw of ping pair_q relative to pair_q-1 */
     double tx_lag;           /* m, Tx-array offset from motion (EPCA model) */
+    double circle_radius;    /* m: 0 = the straight track along +x (default);
+                                > 0: a circle of that radius about the
+                                origin, run counter-clockwise so that +y
+                                (the look direction) points at its centre;
+                                arc length s from (0, -R) heading +x
+                                (a turntable's circular SAS, AirSAS) */
     int true_bistatic;       /* 1: true Tx/array poses sampled on the path at
                                 transmission / reception (different yaw);
                                 0: exact EPCA geometry around each centroid */

@@ -215,7 +215,8 @@ static int level_make_ops(sasnav_pair *pr, pair_level *lv, double xcentre, pair_
     free(y);
     if (rc) return rc;
     /* Ping p sits at the origin of its own centroid frame. */
-    rc = sasnav_op_set_geometry(lv->op_p, &pr->local_p);
+    rc = pr->per_channel ? sasnav_op_set_channels(lv->op_p, pr->chan_p)
+                         : sasnav_op_set_geometry(lv->op_p, &pr->local_p);
     if (rc) return rc;
     return level_rho_p(pr, lv);
 }
@@ -305,7 +306,9 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
     pr->nd = (size_t)array->n_rx * win->n_samples;
     pr->data_p = malloc(sizeof(sasnav_cfloat) * pr->nd);
     pr->data_q = malloc(sizeof(sasnav_cfloat) * pr->nd);
-    if (!pr->data_p || !pr->data_q) {
+    pr->chan_p = malloc(sizeof(sasnav_ping_pose) * (size_t)array->n_rx);
+    pr->chan_q = malloc(sizeof(sasnav_ping_pose) * (size_t)array->n_rx);
+    if (!pr->data_p || !pr->data_q || !pr->chan_p || !pr->chan_q) {
         sasnav_pair_destroy(pr);
         return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     }
@@ -326,6 +329,8 @@ void sasnav_pair_destroy(sasnav_pair *pr)
     for (int v = 0; v < PAIR_LEVELS; v++) level_free(&pr->level[v]);
     free(pr->data_p);
     free(pr->data_q);
+    free(pr->chan_p);
+    free(pr->chan_q);
     free(pr);
 }
 
@@ -355,14 +360,10 @@ int sasnav_pair_set_data(sasnav_pair *pr, const sasnav_cfloat *data_p,
     return sasnav_pair_set_data_lags(pr, data_p, data_q, nominal, pr->opts.tx_lag, pr->opts.tx_lag);
 }
 
-int sasnav_pair_set_data_lags(sasnav_pair *pr, const sasnav_cfloat *data_p,
-                              const sasnav_cfloat *data_q, sasnav_pose nominal, double lag_p,
-                              double lag_q)
+/* Checks and copies the two pings' data and the nominal displacement. */
+static int take_data(sasnav_pair *pr, const sasnav_cfloat *data_p, const sasnav_cfloat *data_q,
+                     sasnav_pose nominal)
 {
-    if (!pr || !data_p || !data_q) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
-    if (!(lag_p >= 0) || !(lag_q >= 0) || !isfinite(lag_p) || !isfinite(lag_q))
-        return sasnav_set_error(SASNAV_ERR_ARG, "Tx-array offsets must be finite and >= 0 (got %g, %g)",
-                                lag_p, lag_q);
     if (!isfinite(nominal.x) || !isfinite(nominal.y) || !isfinite(nominal.theta))
         return sasnav_set_error(SASNAV_ERR_ARG, "nominal displacement is not finite");
     int rc = check_channels(pr, data_p, "p");
@@ -373,13 +374,79 @@ int sasnav_pair_set_data_lags(sasnav_pair *pr, const sasnav_cfloat *data_p,
     memcpy(pr->data_p, data_p, sizeof(sasnav_cfloat) * pr->nd);
     memcpy(pr->data_q, data_q, sizeof(sasnav_cfloat) * pr->nd);
     pr->nominal = nominal;
-    pr->local_p = sasnav_epca_local(lag_p, 0.0);
-    pr->local_q = sasnav_epca_local(lag_q, 0.0);
-    double xc = 0.5 * nominal.x;
+    return SASNAV_OK;
+}
+
+/* Builds the operators of every level for the data and geometry set. */
+static int make_levels(sasnav_pair *pr)
+{
+    int rc = SASNAV_OK;
+    double xc = 0.5 * pr->nominal.x;
     for (int v = 0; v < PAIR_LEVELS && !rc; v++)
         rc = level_make_ops(pr, &pr->level[v], xc, v == 2 ? &pr->level[1] : NULL);
     pr->ready = (rc == 0);
     return rc;
+}
+
+int sasnav_pair_set_data_lags(sasnav_pair *pr, const sasnav_cfloat *data_p,
+                              const sasnav_cfloat *data_q, sasnav_pose nominal, double lag_p,
+                              double lag_q)
+{
+    if (!pr || !data_p || !data_q) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    if (!(lag_p >= 0) || !(lag_q >= 0) || !isfinite(lag_p) || !isfinite(lag_q))
+        return sasnav_set_error(SASNAV_ERR_ARG, "Tx-array offsets must be finite and >= 0 (got %g, %g)",
+                                lag_p, lag_q);
+    int rc = take_data(pr, data_p, data_q, nominal);
+    if (rc) return rc;
+    pr->ready = 0;
+    pr->per_channel = 0;
+    pr->pc_spacing = 0;
+    pr->local_p = sasnav_epca_local(lag_p, 0.0);
+    pr->local_q = sasnav_epca_local(lag_q, 0.0);
+    return make_levels(pr);
+}
+
+/* Mean spacing of the phase centres of a channel layout along its frame's
+ * x axis: their extent over (n - 1). */
+static double layout_pc_spacing(const sasnav_array *array, const sasnav_ping_pose *ch)
+{
+    double lo = INFINITY, hi = -INFINITY;
+    for (int l = 0; l < array->n_rx; l++) {
+        double xr, yr;
+        sasnav_pose_apply(ch[l].array, array->rx_u[l], 0.0, &xr, &yr);
+        double xc = 0.5 * (xr + ch[l].tx.x);
+        lo = xc < lo ? xc : lo;
+        hi = xc > hi ? xc : hi;
+    }
+    return array->n_rx > 1 ? (hi - lo) / (array->n_rx - 1) : 0.0;
+}
+
+int sasnav_pair_set_data_channels(sasnav_pair *pr, const sasnav_cfloat *data_p,
+                                  const sasnav_cfloat *data_q, sasnav_pose nominal,
+                                  const sasnav_ping_pose *channels_p,
+                                  const sasnav_ping_pose *channels_q)
+{
+    if (!pr || !data_p || !data_q || !channels_p || !channels_q)
+        return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    for (int l = 0; l < pr->array.n_rx; l++) {
+        const sasnav_ping_pose *c[2] = {&channels_p[l], &channels_q[l]};
+        for (int j = 0; j < 2; j++)
+            if (!isfinite(c[j]->tx.x) || !isfinite(c[j]->tx.y) || !isfinite(c[j]->tx.theta) ||
+                !isfinite(c[j]->array.x) || !isfinite(c[j]->array.y) ||
+                !isfinite(c[j]->array.theta))
+                return sasnav_set_error(SASNAV_ERR_ARG, "channel %d of ping %s: pose is not finite",
+                                        l, j ? "q" : "p");
+    }
+    int rc = take_data(pr, data_p, data_q, nominal);
+    if (rc) return rc;
+    pr->ready = 0;
+    size_t bytes = sizeof(sasnav_ping_pose) * (size_t)pr->array.n_rx;
+    memcpy(pr->chan_p, channels_p, bytes);
+    memcpy(pr->chan_q, channels_q, bytes);
+    pr->per_channel = 1;
+    double sp = layout_pc_spacing(&pr->array, channels_p);
+    pr->pc_spacing = sp > 0 ? sp : 0.0;
+    return make_levels(pr);
 }
 
 /* Places q's operator at the hypothesised motion error (skipped when it is
@@ -393,9 +460,17 @@ static int place_q(sasnav_pair *pr, int level, sasnav_pose error)
     own->q_placed = 0;
     sasnav_pose sigma = {pr->nominal.x + error.x, pr->nominal.y + error.y,
                          pr->nominal.theta + error.theta};
-    /* Move q's sensors: T_q(sigma) = q's EPCA geometry placed at sigma. */
-    sasnav_ping_pose q = sasnav_ping_place(sigma, &pr->local_q);
-    int rc = sasnav_op_set_geometry(own->op_q, &q);
+    /* Move q's sensors: T_q(sigma) = q's EPCA geometry (or its channels)
+     * placed at sigma. */
+    int rc;
+    if (pr->per_channel) {
+        sasnav_ping_pose ch[SASNAV_MAX_RX];
+        for (int l = 0; l < pr->array.n_rx; l++) ch[l] = sasnav_ping_place(sigma, &pr->chan_q[l]);
+        rc = sasnav_op_set_channels(own->op_q, ch);
+    } else {
+        sasnav_ping_pose q = sasnav_ping_place(sigma, &pr->local_q);
+        rc = sasnav_op_set_geometry(own->op_q, &q);
+    }
     if (rc) return rc;
     own->q_sigma = error;
     own->q_placed = 1;

@@ -53,6 +53,11 @@ struct sasnav_pair {
     sasnav_window win;
     sasnav_pair_opts opts;
     sasnav_ping_pose local_p, local_q; /* EPCA geometry of each ping in its centroid frame */
+    int per_channel;           /* 1: chan_p / chan_q hold each channel's geometry */
+    sasnav_ping_pose *chan_p, *chan_q; /* n_rx each: channel geometries in each
+                                          ping's centroid frame (set_data_channels) */
+    double pc_spacing;         /* phase-centre spacing of the channel layout
+                                  (0: from the array's rx_u) */
     size_t nd;
     sasnav_cfloat *data_p, *data_q;
     sasnav_pose nominal;

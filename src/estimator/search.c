@@ -937,6 +937,7 @@ static int finish(sasnav_pair *pr, double pc_spacing, refine_out *r, refine_out 
 
 static double pair_pc_spacing(const sasnav_pair *pr)
 {
+    if (pr->per_channel && pr->pc_spacing > 0) return pr->pc_spacing;
     return pr->array.n_rx > 1 ? fabs(pr->array.rx_u[1] - pr->array.rx_u[0]) / 2.0 : 0.025;
 }
 

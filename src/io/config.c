@@ -133,6 +133,8 @@ static const key_spec config_keys[] = {
      "m, correlation length of the errors"},
     {"trajectory", "tx_lag", V_REAL, SC(traj.tx_lag), R_NONNEG, 0, 0,
      "m, Tx-array offset (EPCA); not derived from speed"},
+    {"trajectory", "circle_radius", V_REAL, SC(traj.circle_radius), R_NONNEG, 0, 0,
+     "m, 0 = straight track; > 0: circle about the origin (turntable)"},
     {"trajectory", "true_bistatic", V_BOOL, SC(traj.true_bistatic), R_ANY, 0, 0,
      "true: Tx/array poses sampled on the path"},
     {"trajectory", "seed", V_SEED, SC(traj.seed), R_ANY, 0, 0, "random motion errors"},

@@ -857,20 +857,22 @@ static int find_near_point(const sasnav_op *op, double sx, double sy, double hei
     return 0;
 }
 
-static int geometry_error(const sasnav_op *op, const ping_geometry *g)
+static int geometry_error(const sasnav_op *op, const ping_geometry *g, int per_channel)
 {
-    int n = find_near_point(op, g->tx_x, g->tx_y, op->array.tx_height);
-    double dx = op->x[n] - g->tx_x, dy = op->y[n] - g->tx_y, h = op->array.tx_height;
-    if (!(sqrt(dx * dx + dy * dy + h * h) >= MIN_SENSOR_DISTANCE))
-        return sasnav_set_error(SASNAV_ERR_GEOMETRY, "op: point %d (%g, %g) coincides with the Tx",
-                                n, op->x[n], op->y[n]);
     for (int l = 0; l < op->n_rx; l++) {
+        const ping_geometry *gl = &g[per_channel ? l : 0];
+        if (l == 0 || per_channel) {
+            int n = find_near_point(op, gl->tx_x, gl->tx_y, op->array.tx_height);
+            double dx = op->x[n] - gl->tx_x, dy = op->y[n] - gl->tx_y, h = op->array.tx_height;
+            if (!(sqrt(dx * dx + dy * dy + h * h) >= MIN_SENSOR_DISTANCE))
+                return sasnav_set_error(SASNAV_ERR_GEOMETRY,
+                                        "op: point %d (%g, %g) coincides with the Tx of channel %d",
+                                        n, op->x[n], op->y[n], l);
+        }
         double u = op->array.rx_u[l];
-        double xr = g->ar_x + u * g->ar_cos, yr = g->ar_y + u * g->ar_sin;
-        n = find_near_point(op, xr, yr, op->array.rx_height);
-        dx = op->x[n] - xr;
-        dy = op->y[n] - yr;
-        h = op->array.rx_height;
+        double xr = gl->ar_x + u * gl->ar_cos, yr = gl->ar_y + u * gl->ar_sin;
+        int n = find_near_point(op, xr, yr, op->array.rx_height);
+        double dx = op->x[n] - xr, dy = op->y[n] - yr, h = op->array.rx_height;
         if (!(sqrt(dx * dx + dy * dy + h * h) >= MIN_SENSOR_DISTANCE))
             return sasnav_set_error(SASNAV_ERR_GEOMETRY,
                                     "op: point %d (%g, %g) coincides with receiver %d", n,
@@ -879,35 +881,75 @@ static int geometry_error(const sasnav_op *op, const ping_geometry *g)
     return sasnav_set_error(SASNAV_ERR_GEOMETRY, "op: a point coincides with a sensor");
 }
 
-int sasnav_op_set_geometry(sasnav_op *op, const sasnav_ping_pose *ping)
+static ping_geometry make_geometry(const sasnav_op *op, const sasnav_ping_pose *ping)
 {
-    if (!op || !ping) return sasnav_set_error(SASNAV_ERR_ARG, "op: set_geometry with NULL argument");
-    if (!check_pose(ping->tx) || !check_pose(ping->array))
-        return sasnav_set_error(SASNAV_ERR_ARG, "op: ping pose is not finite");
-    op->have_geometry = 0;
     double lambda = sasnav_wavelength(&op->sys);
     int beams = op->sys.beam_pattern;
     ping_geometry g = {ping->tx.x, ping->tx.y, cos(ping->tx.theta), sin(ping->tx.theta),
                        beams ? op->array.tx_length / lambda : 0.0,
                        ping->array.x, ping->array.y, cos(ping->array.theta),
                        sin(ping->array.theta), beams ? op->array.rx_length / lambda : 0.0};
+    return g;
+}
+
+static int same_pose(sasnav_pose a, sasnav_pose b)
+{
+    return a.x == b.x && a.y == b.y && a.theta == b.theta;
+}
+
+/* Geometry of every channel: poses[0] for all (one Tx, N Rx), or poses[l]
+ * for channel l (per_channel). Channels are set up in runs of consecutive
+ * channels that share a transmitter pose: the Tx range and pattern of each
+ * point are computed once per run (the one-Tx case is one run). */
+static int apply_geometry(sasnav_op *op, const sasnav_ping_pose *poses, int per_channel)
+{
+    int n_geom = per_channel ? op->n_rx : 1;
+    for (int c = 0; c < n_geom; c++)
+        if (!check_pose(poses[c].tx) || !check_pose(poses[c].array))
+            return per_channel ? sasnav_set_error(SASNAV_ERR_ARG,
+                                                  "op: pose of channel %d is not finite", c)
+                               : sasnav_set_error(SASNAV_ERR_ARG, "op: ping pose is not finite");
+    op->have_geometry = 0;
+    ping_geometry g[SASNAV_MAX_RX];
+    for (int c = 0; c < n_geom; c++) g[c] = make_geometry(op, &poses[c]);
     long dropped = 0;
-    int bad = 0, n_tasks = op->n_blocks * op->n_rx;
+    for (int l0 = 0, l1; l0 < op->n_rx; l0 = l1) {
+        l1 = op->n_rx;
+        if (per_channel)
+            for (l1 = l0 + 1; l1 < op->n_rx && same_pose(poses[l1].tx, poses[l0].tx); l1++) {}
+        int bad = 0, nl = l1 - l0, n_tasks = op->n_blocks * nl;
+        const ping_geometry *gt = &g[per_channel ? l0 : 0];
 #pragma omp parallel num_threads(op->nthreads) reduction(+ : dropped, bad)
-    {
+        {
 #pragma omp for schedule(dynamic, 4)
-        for (int b = 0; b < op->n_blocks; b++) {
-            int n0 = b * BLOCK, n1 = n0 + BLOCK < op->n_points ? n0 + BLOCK : op->n_points;
-            bad += setup_tx(op, &g, n0, n1);
+            for (int b = 0; b < op->n_blocks; b++) {
+                int n0 = b * BLOCK, n1 = n0 + BLOCK < op->n_points ? n0 + BLOCK : op->n_points;
+                bad += setup_tx(op, gt, n0, n1);
+            }
+#pragma omp for schedule(dynamic, 4)
+            for (int task = 0; task < n_tasks; task++) {
+                int l = l0 + task % nl;
+                dropped += setup_block(op, &g[per_channel ? l : 0], l, task / nl, &bad);
+            }
         }
-#pragma omp for schedule(dynamic, 4)
-        for (int task = 0; task < n_tasks; task++)
-            dropped += setup_block(op, &g, task % op->n_rx, task / op->n_rx, &bad);
+        if (bad) return geometry_error(op, g, per_channel);
     }
-    if (bad) return geometry_error(op, &g);
     op->n_dropped = dropped;
     op->have_geometry = 1;
     return SASNAV_OK;
+}
+
+int sasnav_op_set_geometry(sasnav_op *op, const sasnav_ping_pose *ping)
+{
+    if (!op || !ping) return sasnav_set_error(SASNAV_ERR_ARG, "op: set_geometry with NULL argument");
+    return apply_geometry(op, ping, 0);
+}
+
+int sasnav_op_set_channels(sasnav_op *op, const sasnav_ping_pose *channels)
+{
+    if (!op || !channels)
+        return sasnav_set_error(SASNAV_ERR_ARG, "op: set_channels with NULL argument");
+    return apply_geometry(op, channels, 1);
 }
 
 /* ------------------------------------------------------------------------ */

@@ -11,6 +11,11 @@
  * - true_bistatic = 1: the Tx pose is the vehicle pose at transmission (path
  *   position s - lag/2) and the array pose the vehicle pose at reception
  *   (s + lag/2): positions and yaws of Tx and array differ as in a real ping.
+ * Circular tracks (circle_radius R > 0): the nominal pose at s is
+ * N(s) = (R sin(s / R), -R cos(s / R), s / R) (counter-clockwise about the
+ * origin, looking at it) and the true pose N(s) * (e_surge, e_sway, e_yaw)
+ * (the errors in the vehicle's frame; for the straight track this is the
+ * formula above).
  * The explicit pair error replaces ping pair_q's displacement relative to
  * ping pair_q - 1 by (spacing + surge, sway, yaw); other pings are unchanged.
  */
@@ -54,12 +59,29 @@ static int check_traj(const sasnav_trajectory_params *tp, const sasnav_ping_pose
     if (!(tp->ping_spacing > 0) || !isfinite(tp->ping_spacing))
         return sasnav_set_error(SASNAV_ERR_ARG, "ping spacing must be > 0");
     if (!isfinite(tp->x_start) || !isfinite(tp->tx_lag) || !(tp->surge_rms >= 0) ||
-        !(tp->sway_rms >= 0) || !(tp->yaw_rms >= 0) || !(tp->smooth_length > 0))
+        !(tp->sway_rms >= 0) || !(tp->yaw_rms >= 0) || !(tp->smooth_length > 0) ||
+        !(tp->circle_radius >= 0) || !isfinite(tp->circle_radius))
         return sasnav_set_error(SASNAV_ERR_ARG, "trajectory parameters must be finite and >= 0");
     if (tp->has_pair_error && (tp->pair_q < 1 || tp->pair_q >= tp->n_pings))
         return sasnav_set_error(SASNAV_ERR_ARG, "pair error ping %d outside 1..%d", tp->pair_q,
                                 tp->n_pings - 1);
     return SASNAV_OK;
+}
+
+/* The nominal vehicle pose at arc length s. */
+static sasnav_pose path_nominal(const sasnav_trajectory_params *tp, double s)
+{
+    double r = tp->circle_radius;
+    if (!(r > 0)) return (sasnav_pose){s, 0.0, 0.0};
+    double a = s / r;
+    return (sasnav_pose){r * sin(a), -r * cos(a), sasnav_wrap_angle(a)};
+}
+
+/* The vehicle pose at s with errors (surge, sway, yaw) in its own frame. */
+static sasnav_pose path_pose(const sasnav_trajectory_params *tp, double s, double surge,
+                             double sway, double yaw)
+{
+    return sasnav_pose_compose(path_nominal(tp, s), (sasnav_pose){surge, sway, yaw});
 }
 
 int sasnav_trajectory_nominal(const sasnav_trajectory_params *tp, sasnav_ping_pose *poses)
@@ -68,7 +90,7 @@ int sasnav_trajectory_nominal(const sasnav_trajectory_params *tp, sasnav_ping_po
     if (rc) return rc;
     sasnav_ping_pose local = sasnav_epca_local(tp->tx_lag, 0.0);
     for (int p = 0; p < tp->n_pings; p++) {
-        sasnav_pose c = {tp->x_start + p * tp->ping_spacing, 0.0, 0.0};
+        sasnav_pose c = path_nominal(tp, tp->x_start + p * tp->ping_spacing);
         poses[p] = sasnav_ping_place(c, &local);
     }
     return SASNAV_OK;
@@ -89,15 +111,15 @@ int sasnav_trajectory_true(const sasnav_trajectory_params *tp, sasnav_ping_pose 
         double s = tp->x_start + p * tp->ping_spacing;
         if (tp->true_bistatic) {
             double st = s - 0.5 * tp->tx_lag, sr = s + 0.5 * tp->tx_lag;
-            sasnav_pose tx = {st + smooth_error_at(&surge, st), smooth_error_at(&sway, st),
-                              smooth_error_at(&yaw, st)};
-            sasnav_pose ar = {sr + smooth_error_at(&surge, sr), smooth_error_at(&sway, sr),
-                              smooth_error_at(&yaw, sr)};
+            sasnav_pose tx = path_pose(tp, st, smooth_error_at(&surge, st),
+                                       smooth_error_at(&sway, st), smooth_error_at(&yaw, st));
+            sasnav_pose ar = path_pose(tp, sr, smooth_error_at(&surge, sr),
+                                       smooth_error_at(&sway, sr), smooth_error_at(&yaw, sr));
             poses[p].tx = tx;
             poses[p].array = ar;
         } else {
-            sasnav_pose c = {s + smooth_error_at(&surge, s), smooth_error_at(&sway, s),
-                             smooth_error_at(&yaw, s)};
+            sasnav_pose c = path_pose(tp, s, smooth_error_at(&surge, s), smooth_error_at(&sway, s),
+                                      smooth_error_at(&yaw, s));
             poses[p] = sasnav_ping_place(c, &local);
         }
     }
@@ -106,6 +128,13 @@ int sasnav_trajectory_true(const sasnav_trajectory_params *tp, sasnav_ping_pose 
         sasnav_ping_pose local_q = sasnav_ping_local(&poses[q]);
         sasnav_pose d = {tp->ping_spacing + tp->pair_error.x, tp->pair_error.y,
                          tp->pair_error.theta};
+        if (tp->circle_radius > 0) {
+            double s1 = tp->x_start + q * tp->ping_spacing;
+            sasnav_pose n = sasnav_pose_between(path_nominal(tp, s1 - tp->ping_spacing),
+                                                path_nominal(tp, s1));
+            d = (sasnav_pose){n.x + tp->pair_error.x, n.y + tp->pair_error.y,
+                              n.theta + tp->pair_error.theta};
+        }
         sasnav_pose cq = sasnav_pose_compose(sasnav_ping_centroid(&poses[q - 1]), d);
         poses[q] = sasnav_ping_place(cq, &local_q);
     }

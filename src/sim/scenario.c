@@ -72,6 +72,58 @@ int sasnav_scenario_preset(const char *name, sasnav_scenario *sc)
         sc->range_min = 9.3;
         sc->range_max = 10.8;
         sasnav_grid_make(-0.15, 0.15, 121, 9.85, 10.15, 121, &sc->image_grid);
+    } else if (strcmp(name, "circular") == 0) {
+        /* A simulated AirSAS (Penn State ARL's in-air circular SAS,
+         * ../shared/data/airsas: docs/navigation.md, "Virtual arrays"): one
+         * omnidirectional speaker and one microphone sharing x, y, 0.258 m
+         * and 0.220 m above the scene plane, an LFM of 10-30 kHz in air
+         * (c = 343 m/s), pings every degree of a 0.85 m circle about the
+         * scene centre (360 pings, 14.8 mm apart). The smooth motion errors
+         * (a few millimetres over metres of arc) stand for a navigation
+         * drift: the run's nominal circle is the "input navigation" whose
+         * error virtual-array navigation must remove. */
+        memset(sc, 0, sizeof *sc);
+        sasnav_system_default(&sc->sys);
+        sc->sys.sound_speed = 343.0;
+        sc->sys.f0 = 20e3;
+        sc->sys.bandwidth = 20e3;
+        sc->sys.sample_rate = 25e3;
+        sc->sys.attenuation = SASNAV_ATTEN_NONE;
+        sc->sys.beam_pattern = 0;
+        memset(&sc->array, 0, sizeof sc->array);
+        sc->array.n_rx = 1; /* at the array's origin, with the Tx */
+        sc->array.tx_height = 0.2575;
+        sc->array.rx_height = 0.2195;
+        sc->range_min = 0.45;
+        sc->range_max = 1.30;
+        sc->range_of_interest = 0.85;
+        sasnav_trajectory_params *t = &sc->traj;
+        t->circle_radius = 0.85;
+        t->ping_spacing = 0.85 * M_PI / 180.0;
+        t->n_pings = 360;
+        t->speed = 0.1;
+        t->x_start = 0.0;
+        t->surge_rms = 0.003;
+        t->sway_rms = 0.003;
+        t->yaw_rms = 0.0; /* an omnidirectional SISO ping has no yaw of its own */
+        t->smooth_length = 1.5;
+        t->tx_lag = 0.0;
+        t->true_bistatic = 0;
+        t->seed = 7;
+        sc->scene_kind = SASNAV_SCENE_RIPPLES;
+        sasnav_ripple_default(&sc->ripples);
+        sc->ripples.x_min = -0.12;
+        sc->ripples.x_max = 0.12;
+        sc->ripples.y_min = -0.12;
+        sc->ripples.y_max = 0.12;
+        sc->ripples.ripple_period = 0.08;
+        sc->ripples.disc_x = 0.08;
+        sc->ripples.disc_y = -0.05;
+        sc->ripples.disc_radius = 0.05;
+        sc->snr_db = 30.0;
+        sc->noise_seed = 11;
+        sasnav_aiding_default(&sc->aiding);
+        sasnav_grid_make(-0.3, 0.3, 151, -0.3, 0.3, 151, &sc->image_grid);
     } else if (strcmp(name, "survey") == 0) {
         /* A 300 kHz survey SAS in the class of NATO CMRE's MUSCLE (300 kHz,
          * 60 kHz band: docs/config.md "survey" for the sources and what is
@@ -121,7 +173,8 @@ int sasnav_scenario_preset(const char *name, sasnav_scenario *sc)
         sasnav_grid_make(43.0, 53.0, 1001, 65.0, 75.0, 1001, &sc->image_grid);
     } else {
         return sasnav_set_error(SASNAV_ERR_ARG,
-                                "unknown preset '%s' (known: paper-pair, paper-trajectory, point, survey)",
+                                "unknown preset '%s' (known: paper-pair, paper-trajectory, point, "
+                                "circular, survey)",
                                 name);
     }
     snprintf(sc->name, sizeof sc->name, "%s", name);
@@ -151,7 +204,8 @@ int sasnav_scenario_check(const sasnav_scenario *sc)
         return sasnav_set_error(SASNAV_ERR_ARG, "ping spacing and speed must be > 0");
     if (!isfinite(t->x_start) || !(t->tx_lag >= 0) || !isfinite(t->tx_lag) ||
         !(t->surge_rms >= 0) || !(t->sway_rms >= 0) || !(t->yaw_rms >= 0) ||
-        !isfinite(t->surge_rms + t->sway_rms + t->yaw_rms) || !(t->smooth_length > 0))
+        !isfinite(t->surge_rms + t->sway_rms + t->yaw_rms) || !(t->smooth_length > 0) ||
+        !(t->circle_radius >= 0) || !isfinite(t->circle_radius))
         return sasnav_set_error(SASNAV_ERR_ARG, "trajectory error parameters must be finite, >= 0");
     if (t->has_pair_error &&
         (t->pair_q < 1 || t->pair_q >= t->n_pings || !isfinite(t->pair_error.x) ||
@@ -178,8 +232,15 @@ int sasnav_scenario_check(const sasnav_scenario *sc)
         if (!(r->x_max > r->x_min) || !(r->y_max > r->y_min) || !(r->density > 0) ||
             !isfinite(r->x_min + r->x_max + r->y_min + r->y_max + r->density))
             return sasnav_set_error(SASNAV_ERR_ARG, "ripple scene extent/density invalid");
-        if (!(r->y_min > 0))
+        if (sc->traj.circle_radius > 0) {
+            double ax = fmax(fabs(r->x_min), fabs(r->x_max)), ay = fmax(fabs(r->y_min), fabs(r->y_max));
+            if (!(hypot(ax, ay) < sc->traj.circle_radius))
+                return sasnav_set_error(SASNAV_ERR_GEOMETRY,
+                                        "scene must lie inside the %g m circle of the track",
+                                        sc->traj.circle_radius);
+        } else if (!(r->y_min > 0)) {
             return sasnav_set_error(SASNAV_ERR_GEOMETRY, "scene must lie in front of the track (y > 0)");
+        }
     } else if (sc->scene_kind == SASNAV_SCENE_FILE) {
         if (!sc->scene_file[0]) return sasnav_set_error(SASNAV_ERR_ARG, "scene file not named");
     } else {

@@ -189,6 +189,7 @@ class TrajectoryParams(Structure):  # sim.h
         ("pair_q", c_int),
         ("pair_error", Pose),
         ("tx_lag", c_double),
+        ("circle_radius", c_double),
         ("true_bistatic", c_int),
         ("seed", c_uint64),
     ]

@@ -1,0 +1,309 @@
+/* Virtual arrays of consecutive pings and navigation by their motion. See
+ * virtual.h for the contract and docs/navigation.md, "Virtual arrays". */
+#include "sasnav/virtual.h"
+#include "sasnav/error.h"
+#include "core/clock.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+sasnav_pose sasnav_channels_centroid(const sasnav_array *array, const sasnav_ping_pose *channels)
+{
+    double sx = 0, sy = 0, sc = 0, ss = 0;
+    int n = array->n_rx;
+    for (int l = 0; l < n; l++) {
+        double xr, yr;
+        sasnav_pose_apply(channels[l].array, array->rx_u[l], 0.0, &xr, &yr);
+        sx += 0.5 * (xr + channels[l].tx.x);
+        sy += 0.5 * (yr + channels[l].tx.y);
+        sc += cos(channels[l].array.theta);
+        ss += sin(channels[l].array.theta);
+    }
+    sasnav_pose c = {sx / n, sy / n, atan2(ss, sc)};
+    return c;
+}
+
+int sasnav_virtual_array(const sasnav_array *array, int k, sasnav_array *out)
+{
+    if (!array || !out) return sasnav_set_error(SASNAV_ERR_ARG, "virtual array: NULL argument");
+    int rc = sasnav_array_check(array);
+    if (rc) return rc;
+    if (k < 1 || (long)k * array->n_rx > SASNAV_MAX_RX)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "virtual array: %d pings of %d channels make more than %d channels",
+                                k, array->n_rx, SASNAV_MAX_RX);
+    sasnav_array v = *array;
+    v.n_rx = k * array->n_rx;
+    for (int j = 0; j < k; j++)
+        for (int l = 0; l < array->n_rx; l++) v.rx_u[j * array->n_rx + l] = array->rx_u[l];
+    *out = v;
+    return SASNAV_OK;
+}
+
+int sasnav_virtual_layout(const sasnav_array *array, const sasnav_ping_pose *poses, int k,
+                          sasnav_ping_pose *local, sasnav_pose *centroid)
+{
+    if (!array || !poses || !local || !centroid)
+        return sasnav_set_error(SASNAV_ERR_ARG, "virtual layout: NULL argument");
+    sasnav_array v;
+    int rc = sasnav_virtual_array(array, k, &v);
+    if (rc) return rc;
+    int n = array->n_rx;
+    for (int j = 0; j < k; j++) {
+        const sasnav_ping_pose *p = &poses[j];
+        if (!isfinite(p->tx.x) || !isfinite(p->tx.y) || !isfinite(p->tx.theta) ||
+            !isfinite(p->array.x) || !isfinite(p->array.y) || !isfinite(p->array.theta))
+            return sasnav_set_error(SASNAV_ERR_ARG, "virtual layout: pose of ping %d is not finite", j);
+        for (int l = 0; l < n; l++) local[j * n + l] = *p;
+    }
+    sasnav_pose c = sasnav_channels_centroid(&v, local);
+    for (int i = 0; i < v.n_rx; i++) {
+        local[i].tx = sasnav_pose_between(c, local[i].tx);
+        local[i].array = sasnav_pose_between(c, local[i].array);
+    }
+    *centroid = c;
+    return SASNAV_OK;
+}
+
+void sasnav_virtual_default_opts(sasnav_virtual_opts *opts)
+{
+    if (!opts) return;
+    memset(opts, 0, sizeof *opts);
+    opts->k = 4;
+    opts->stride = 0;
+    sasnav_pair_default_opts(&opts->pair);
+    /* The yaw of a group of omnidirectional pings shows only through its
+     * channels' positions: held at the input navigation's (a gyro's). */
+    opts->pair.fix_yaw = 1;
+    /* The coarse criteria (k, i = 2, 1) of the global and level-1 stages
+     * pull disjoint virtual pings onto each other (phase-centre
+     * coincidence: docs/navigation.md, "Virtual arrays"); the full ones do
+     * not, and these layouts are small. */
+    opts->pair.coarse_k = opts->pair.k;
+    opts->pair.coarse_i = opts->pair.i;
+    opts->iterations = 2;
+    opts->nthreads = 0;
+}
+
+void sasnav_virtual_navigation_free(sasnav_virtual_navigation *nav)
+{
+    if (!nav) return;
+    free(nav->pairs);
+    free(nav->centroid_in);
+    free(nav->centroid);
+    free(nav->nav);
+    memset(nav, 0, sizeof *nav);
+}
+
+/* The data of the virtual ping made of pings first..first+k-1 (channel
+ * j * n_rx + l = channel l of ping first + j). */
+static int virtual_data(const sasnav_run *run, int first, int k, sasnav_cfloat *out)
+{
+    size_t per = sasnav_run_ping_size(run);
+    for (int j = 0; j < k; j++) {
+        const sasnav_cfloat *ping = NULL;
+        int rc = sasnav_run_get_ping(run, first + j, out + (size_t)j * per, &ping);
+        if (rc) return rc;
+        if (ping != out + (size_t)j * per) memcpy(out + (size_t)j * per, ping, per * sizeof *out);
+    }
+    return SASNAV_OK;
+}
+
+typedef struct {
+    const sasnav_run *run;
+    const sasnav_virtual_opts *o;
+    sasnav_array varray;
+    int k, stride, n_groups, nv;
+    sasnav_ping_pose *layout_in;  /* n_groups * nv: local channel poses */
+} vctx;
+
+/* One pair (groups g and g + 1) with the thread's estimator. */
+static int estimate_pair(const vctx *c, sasnav_pair *est, sasnav_cfloat *dp, sasnav_cfloat *dq,
+                         int g, sasnav_virtual_pair *vp)
+{
+    int fp = g * c->stride, fq = (g + 1) * c->stride;
+    int rc = virtual_data(c->run, fp, c->k, dp);
+    if (!rc) rc = virtual_data(c->run, fq, c->k, dq);
+    if (!rc)
+        rc = sasnav_pair_set_data_channels(est, dp, dq, vp->nominal, c->layout_in + (size_t)g * c->nv,
+                                           c->layout_in + (size_t)(g + 1) * c->nv);
+    if (!rc) rc = sasnav_pair_estimate(est, &vp->est);
+    if (rc) rc = sasnav_prefix_error(rc, "virtual pings at pings %d and %d", fp, fq);
+    return rc;
+}
+
+/* One pass over the pairs with `nav` as the input navigation: layouts,
+ * nominal and true displacements, the estimates (opts->nthreads at once),
+ * and the chained centroids (centroid[0] = centroid_in[0]). */
+static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigation *out)
+{
+    const sasnav_run *run = c->run;
+    const sasnav_virtual_opts *opts = c->o;
+    int ng = c->n_groups, rc = SASNAV_OK;
+    sasnav_ping_pose *scratch = malloc(sizeof *scratch * (size_t)c->nv);
+    if (!scratch) return sasnav_set_error(SASNAV_ERR_NOMEM, "virtual arrays: out of memory");
+    for (int g = 0; g < ng && !rc; g++)
+        rc = sasnav_virtual_layout(&run->array, nav + (size_t)g * c->stride, c->k,
+                                   c->layout_in + (size_t)g * c->nv, &out->centroid_in[g]);
+    for (int g = 0; g + 1 < ng && !rc; g++) {
+        sasnav_virtual_pair *vp = &out->pairs[g];
+        memset(vp, 0, sizeof *vp);
+        vp->first_p = g * c->stride;
+        vp->first_q = (g + 1) * c->stride;
+        vp->nominal = sasnav_pose_between(out->centroid_in[g], out->centroid_in[g + 1]);
+        vp->truth = (sasnav_pose){NAN, NAN, NAN};
+        if (run->truth) {
+            sasnav_pose cp, cq;
+            rc = sasnav_virtual_layout(&run->array, run->truth + vp->first_p, c->k, scratch, &cp);
+            if (!rc) rc = sasnav_virtual_layout(&run->array, run->truth + vp->first_q, c->k, scratch, &cq);
+            if (!rc) vp->truth = sasnav_pose_between(cp, cq);
+        }
+    }
+    free(scratch);
+    if (rc) return rc;
+
+    int nthreads = opts->nthreads > 0 ? opts->nthreads : omp_get_max_threads();
+    if (nthreads > ng - 1) nthreads = ng - 1;
+    int failed = 0, fail_rc = SASNAV_OK;
+    char fail_msg[512] = "";
+#pragma omp parallel num_threads(nthreads)
+    {
+        sasnav_pair_opts po = opts->pair;
+        po.nthreads = 1;
+        sasnav_pair *est = NULL;
+        size_t nd = sasnav_run_ping_size(run) * (size_t)c->k;
+        sasnav_cfloat *dp = malloc(nd * sizeof *dp), *dq = malloc(nd * sizeof *dq);
+        int trc = dp && dq ? sasnav_pair_create(&run->sys, &c->varray, &run->win, &po, &est)
+                           : sasnav_set_error(SASNAV_ERR_NOMEM, "virtual arrays: out of memory");
+#pragma omp for schedule(dynamic, 1)
+        for (int g = 0; g < ng - 1; g++) {
+            int stop;
+#pragma omp atomic read
+            stop = failed;
+            if (stop) continue;
+            if (!trc) trc = estimate_pair(c, est, dp, dq, g, &out->pairs[g]);
+            if (trc) {
+#pragma omp critical(sasnav_virtual_failure)
+                if (!failed) {
+                    failed = 1;
+                    fail_rc = trc;
+                    snprintf(fail_msg, sizeof fail_msg, "%s", sasnav_last_error());
+                }
+            }
+        }
+        sasnav_pair_destroy(est);
+        free(dp);
+        free(dq);
+    }
+    if (failed) return sasnav_set_error(fail_rc, "%s", fail_msg);
+    out->centroid[0] = out->centroid_in[0];
+    for (int g = 0; g + 1 < ng; g++)
+        out->centroid[g + 1] = sasnav_pose_compose(out->centroid[g], out->pairs[g].est.displacement);
+    return SASNAV_OK;
+}
+
+/* The corrected navigation: group g's correction D_g = centroid[g] *
+ * inverse(centroid_in[g]) (a rigid move), interpolated linearly in ping
+ * index between the groups' middle pings (x, y, yaw components; constant
+ * before the first and after the last), applied to each ping of `nav`.
+ * Interpolation rather than moving each group as a block: the pings of a
+ * group then follow the slope between its neighbours, so the next pass's
+ * layouts carry the tilt and stretch that the input navigation had wrong
+ * inside the groups (measured: docs/navigation.md, "Virtual arrays"). */
+static void apply_corrections(const vctx *c, const sasnav_ping_pose *nav,
+                              const sasnav_virtual_navigation *v, sasnav_ping_pose *out)
+{
+    int ng = c->n_groups;
+    double half = 0.5 * (c->k - 1);
+    for (int i = 0; i < c->run->n_pings; i++) {
+        double u = ((double)i - half) / c->stride; /* group coordinate */
+        int g = (int)floor(u);
+        double w = u - g;
+        if (g < 0) {
+            g = 0;
+            w = 0;
+        } else if (g >= ng - 1) {
+            g = ng - 1;
+            w = 0;
+        }
+        sasnav_pose d0 = sasnav_pose_compose(v->centroid[g], sasnav_pose_inverse(v->centroid_in[g]));
+        sasnav_pose d = d0;
+        if (w > 0) {
+            sasnav_pose d1 =
+                sasnav_pose_compose(v->centroid[g + 1], sasnav_pose_inverse(v->centroid_in[g + 1]));
+            d.x = (1 - w) * d0.x + w * d1.x;
+            d.y = (1 - w) * d0.y + w * d1.y;
+            d.theta = d0.theta + w * sasnav_wrap_angle(d1.theta - d0.theta);
+        }
+        out[i].tx = sasnav_pose_compose(d, nav[i].tx);
+        out[i].array = sasnav_pose_compose(d, nav[i].array);
+    }
+}
+
+int sasnav_navigate_virtual(const sasnav_run *run, const sasnav_virtual_opts *opts,
+                            sasnav_virtual_navigation *out)
+{
+    if (!run || !opts || !out) return sasnav_set_error(SASNAV_ERR_ARG, "navigate_virtual: NULL argument");
+    memset(out, 0, sizeof *out);
+    double t0 = sasnav_now_seconds();
+    int rc = sasnav_run_check_header(run);
+    if (rc) return rc;
+    vctx c;
+    memset(&c, 0, sizeof c);
+    c.run = run;
+    c.o = opts;
+    c.k = opts->k;
+    c.stride = opts->stride > 0 ? opts->stride : opts->k;
+    if (c.k < 1) return sasnav_set_error(SASNAV_ERR_ARG, "virtual arrays: k = %d must be >= 1", c.k);
+    if (opts->iterations < 1 || opts->iterations > 20)
+        return sasnav_set_error(SASNAV_ERR_ARG, "virtual arrays: iterations = %d must be 1..20",
+                                opts->iterations);
+    rc = sasnav_virtual_array(&run->array, c.k, &c.varray);
+    if (rc) return rc;
+    rc = sasnav_pair_opts_check(&opts->pair);
+    if (rc) return rc;
+    c.n_groups = run->n_pings >= c.k ? (run->n_pings - c.k) / c.stride + 1 : 0;
+    if (c.n_groups < 2)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "virtual arrays: %d pings make fewer than two groups of %d every %d",
+                                run->n_pings, c.k, c.stride);
+    c.nv = c.varray.n_rx;
+    int ng = c.n_groups;
+    out->n_pings = run->n_pings;
+    out->k = c.k;
+    out->stride = c.stride;
+    out->n_groups = ng;
+    out->n_pairs = ng - 1;
+    out->pairs = calloc((size_t)ng, sizeof *out->pairs);
+    out->centroid_in = calloc((size_t)ng, sizeof *out->centroid_in);
+    out->centroid = calloc((size_t)ng, sizeof *out->centroid);
+    out->nav = calloc((size_t)run->n_pings, sizeof *out->nav);
+    sasnav_ping_pose *cur = malloc(sizeof *cur * (size_t)run->n_pings);
+    c.layout_in = malloc(sizeof *c.layout_in * (size_t)ng * (size_t)c.nv);
+    if (!out->pairs || !out->centroid_in || !out->centroid || !out->nav || !c.layout_in || !cur) {
+        free(c.layout_in);
+        free(cur);
+        sasnav_virtual_navigation_free(out);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "virtual arrays: out of memory");
+    }
+    memcpy(cur, run->nav, sizeof *cur * (size_t)run->n_pings);
+    for (int it = 0; it < opts->iterations && !rc; it++) {
+        rc = one_pass(&c, cur, out);
+        if (!rc) {
+            apply_corrections(&c, cur, out, out->nav);
+            memcpy(cur, out->nav, sizeof *cur * (size_t)run->n_pings);
+        }
+        out->iterations = it + 1;
+    }
+    free(c.layout_in);
+    free(cur);
+    if (rc) {
+        sasnav_virtual_navigation_free(out);
+        return rc;
+    }
+    out->seconds = sasnav_now_seconds() - t0;
+    return SASNAV_OK;
+}
