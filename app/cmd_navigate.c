@@ -4,6 +4,7 @@
 #include "core/clock.h"
 #include "sasnav/io.h"
 #include "sasnav/navigate.h"
+#include "sasnav/virtual.h"
 
 #include <getopt.h>
 #include <jansson.h>
@@ -21,6 +22,10 @@ static const char *help =
     "                       [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]\n"
     "                       [--threads N] [--json] [--checkpoint FILE]\n"
     "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
+    "       sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]\n"
+    "                       [--iterations N]\n"
+    "                       [--estimate-yaw] [--k K] [--i I] [--cross-extent M]\n"
+    "                       [--range-extent M] [--threads N] [--json] -o nav.h5\n"
     "\n"
     "Estimates the displacement of every consecutive ping pair, composes them\n"
     "into a trajectory starting at the run's nominal first ping, aligns it to\n"
@@ -87,6 +92,32 @@ static const char *help =
     "                    command resumes from FILE and gives the same result\n"
     "                    (docs/cli.md). FILE is removed once -o is written\n"
     "  --json            machine-readable summary on stdout\n"
+    "\n"
+    "Virtual arrays (single-channel sonars, AirSAS; docs/navigation.md,\n"
+    "\"Virtual arrays\"): K consecutive pings form one virtual ping of K x N\n"
+    "channels, each with its own transmitter and receiver pose from the\n"
+    "input navigation; the motion between virtual pings S pings apart is\n"
+    "estimated and spread over the pings (corrections interpolated between\n"
+    "the groups' middle pings):\n"
+    "  --virtual-array K pings per virtual ping (2..128 / channels)\n"
+    "  --interleave M    a virtual ping takes every M-th ping (default 1);\n"
+    "                    M = 2 with stride 1 compares interleaved groups\n"
+    "                    (pings 0,2,4,.. with 1,3,5,..): their apertures\n"
+    "                    overlap, 7-15x more precise than disjoint groups\n"
+    "                    on the simulated AirSAS, at K x M ping spacings of\n"
+    "                    aperture per group (keep it short enough for the\n"
+    "                    scene: grating lobes)\n"
+    "  --stride S        pings between virtual pings (default K when M = 1:\n"
+    "                    disjoint groups; 1 when M > 1. Groups sharing pings\n"
+    "                    tie the estimate to the input navigation)\n"
+    "  --iterations N    passes, each on the previous pass's navigation\n"
+    "                    (default 2)\n"
+    "  --estimate-yaw    estimate each step's yaw too (default: held at the\n"
+    "                    input navigation's: an omnidirectional group shows\n"
+    "                    its yaw only through its length)\n"
+    "  The estimation grid is square, centred at the run's range of interest,\n"
+    "  --cross-extent / --range-extent default 0.35 x that range (0.3 m for\n"
+    "  AirSAS); the search box is +-0.7 ping spacings in surge and sway.\n"
     "  -o FILE           output navigation file (HDF5)\n"
     "\n"
     "Progress on stderr: a bar on a terminal, otherwise a line every 10 s\n"
@@ -264,6 +295,96 @@ static void print_text(const sasnav_navigation *nav)
                nav->threads_over_pairs, nav->threads_over_pairs == 1 ? "" : "s");
 }
 
+/* `navigate --virtual-array K`: virtual pings of K pings (virtual.h). */
+static int navigate_virtual(const char *input, const char *output, sasnav_virtual_opts *vo,
+                            int json)
+{
+    sasnav_run *run = NULL;
+    int rc = sasnav_run_open(input, &run);
+    if (rc) return cli_fail("navigate", rc, "cannot read %s", input);
+    sasnav_pair_opts *po = &vo->pair;
+    po->range = run->range_of_interest;
+    if (!(po->cross_extent > 0)) po->cross_extent = 0.35 * run->range_of_interest;
+    if (!(po->range_extent > 0)) po->range_extent = 0.35 * run->range_of_interest;
+    double step = run->ping_spacing > 0 ? run->ping_spacing : 0.01;
+    po->box = (sasnav_pose){0.7 * step, 0.7 * step, po->fix_yaw ? 0.02 : 0.0};
+    if (sasnav_pair_opts_check(po)) {
+        sasnav_run_free(run);
+        return cli_usage("navigate", "%s", sasnav_last_error());
+    }
+    sasnav_virtual_navigation vn;
+    rc = sasnav_navigate_virtual(run, vo, &vn);
+    if (rc) {
+        sasnav_run_free(run);
+        return cli_fail("navigate", rc, "virtual-array navigation of %s failed", input);
+    }
+    rc = sasnav_nav_write(output, vn.n_pings, vn.nav, run->truth);
+    if (rc) {
+        sasnav_virtual_navigation_free(&vn);
+        sasnav_run_free(run);
+        return cli_fail("navigate", rc, "cannot write %s", output);
+    }
+    int n_flagged = 0;
+    for (int j = 0; j < vn.n_pairs; j++) {
+        const sasnav_virtual_pair *vp = &vn.pairs[j];
+        if (vp->est.verdict != SASNAV_VERDICT_OK) {
+            n_flagged++;
+            fprintf(stderr, "sasnav navigate: warning: virtual pings at %d and %d: %s (eta %.3f)\n",
+                    vp->first_p, vp->first_q, sasnav_verdict_name(vp->est.verdict), vp->est.eta);
+        }
+    }
+    if (json) {
+        json_t *root = json_object(), *pairs = json_array();
+        json_object_set_new(root, "input", json_string(input));
+        json_object_set_new(root, "virtual_array", json_integer(vn.k));
+        json_object_set_new(root, "stride", json_integer(vn.stride));
+        json_object_set_new(root, "interleave", json_integer(vn.interleave));
+        json_object_set_new(root, "iterations", json_integer(vn.iterations));
+        json_object_set_new(root, "seconds", json_real(vn.seconds));
+        for (int j = 0; j < vn.n_pairs; j++) {
+            const sasnav_virtual_pair *vp = &vn.pairs[j];
+            json_t *o = json_object();
+            json_object_set_new(o, "p", json_integer(vp->first_p));
+            json_object_set_new(o, "q", json_integer(vp->first_q));
+            json_object_set_new(o, "nominal", pose_json(vp->nominal));
+            json_object_set_new(o, "displacement", pose_json(vp->est.displacement));
+            json_object_set_new(o, "truth", pose_json(vp->truth));
+            json_object_set_new(o, "status", json_string(sasnav_verdict_name(vp->est.verdict)));
+            json_object_set_new(o, "eta", real_or_null(vp->est.eta));
+            json_object_set_new(o, "seconds", json_real(vp->est.seconds));
+            json_array_append_new(pairs, o);
+        }
+        json_object_set_new(root, "pairs", pairs);
+        json_object_set_new(root, "flagged", json_integer(n_flagged));
+        char *text = json_dumps(root, JSON_INDENT(2) | JSON_REAL_PRECISION(10));
+        if (text) puts(text);
+        free(text);
+        json_decref(root);
+    } else {
+        printf("virtual pings of %d pings (every %d) every %d pings, %d pass%s\n", vn.k, vn.interleave,
+               vn.stride, vn.iterations, vn.iterations == 1 ? "" : "es");
+        printf("  p    q    displacement: surge mm  sway mm  yaw mrad | change from input mm, mm, mrad%s\n",
+               run->truth ? " | error vs truth mm, mm, mrad" : "");
+        for (int j = 0; j < vn.n_pairs; j++) {
+            const sasnav_virtual_pair *vp = &vn.pairs[j];
+            sasnav_pose d = vp->est.displacement, n = vp->nominal, t = vp->truth;
+            printf("%4d %4d  %+9.3f %+8.3f %+8.3f | %+7.3f %+7.3f %+7.3f", vp->first_p, vp->first_q,
+                   1e3 * d.x, 1e3 * d.y, 1e3 * d.theta, 1e3 * (d.x - n.x), 1e3 * (d.y - n.y),
+                   1e3 * (d.theta - n.theta));
+            if (run->truth)
+                printf(" | %+7.3f %+7.3f %+7.3f", 1e3 * (d.x - t.x), 1e3 * (d.y - t.y),
+                       1e3 * (d.theta - t.theta));
+            printf("  %s\n", sasnav_verdict_name(vp->est.verdict));
+        }
+        printf("%d pairs in %.2f s (%.2f s per pair), %d flagged\n", vn.n_pairs, vn.seconds,
+               vn.n_pairs > 0 ? vn.seconds / (vn.n_pairs * vn.iterations) : 0.0, n_flagged);
+    }
+    fprintf(stderr, "sasnav navigate: %d pings -> %s\n", vn.n_pings, output);
+    sasnav_virtual_navigation_free(&vn);
+    sasnav_run_free(run);
+    return 0;
+}
+
 int cmd_navigate(int argc, char **argv)
 {
     static const struct option longopts[] = {
@@ -277,6 +398,9 @@ int cmd_navigate(int argc, char **argv)
         {"no-resolve", no_argument, 0, 'R'}, {"motion-sigma", required_argument, 0, 'M'},
         {"speed-lags", required_argument, 0, 'S'}, {"aiding-bias", required_argument, 0, 'B'},
         {"checkpoint", required_argument, 0, 'C'},
+        {"virtual-array", required_argument, 0, 'V'}, {"stride", required_argument, 0, 'T'},
+        {"iterations", required_argument, 0, 'I'}, {"estimate-yaw", no_argument, 0, 'W'},
+        {"interleave", required_argument, 0, 'G'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -284,11 +408,32 @@ int cmd_navigate(int argc, char **argv)
     no.compact_pairs = 1; /* long runs: the pairs stay packed (docs/survey.md) */
     const char *output = NULL, *checkpoint = NULL;
     long threads = 0, k = no.pair.k, iters = no.pair.i;
-    int json = 0, opt, anchor_truth = 0, have_first = 0;
+    int json = 0, opt, anchor_truth = 0, have_first = 0, n_general = 0, estimate_yaw = 0;
+    long vk = 0, vstride = 0, viters = 2, vinter = 1;
+    int have_cross = 0, have_range = 0;
     double first[3] = {0, 0, 0};
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
+        /* Options of the pair navigation alone (refused with --virtual-array). */
+        if (strchr("mLyfAFUNBSRMC", opt)) n_general++;
+        have_cross |= opt == 'X';
+        have_range |= opt == 'E';
         switch (opt) {
+        case 'V':
+            if (cli_parse_int(optarg, 2, SASNAV_MAX_RX, &vk))
+                return cli_usage("navigate", "--virtual-array needs 2..%d pings", SASNAV_MAX_RX);
+            break;
+        case 'T':
+            if (cli_parse_int(optarg, 1, 100000, &vstride))
+                return cli_usage("navigate", "--stride needs 1..100000 pings");
+            break;
+        case 'I':
+            if (cli_parse_int(optarg, 1, 20, &viters)) return cli_usage("navigate", "--iterations needs 1..20");
+            break;
+        case 'W': estimate_yaw = 1; break;
+        case 'G':
+            if (cli_parse_int(optarg, 1, 1000, &vinter)) return cli_usage("navigate", "--interleave needs 1..1000");
+            break;
         case 'm':
             if (!strcmp(optarg, "subspace")) no.method = SASNAV_METHOD_SUBSPACE;
             else if (!strcmp(optarg, "dpca")) no.method = SASNAV_METHOD_DPCA;
@@ -365,6 +510,32 @@ int cmd_navigate(int argc, char **argv)
     if (have_first && anchor_truth)
         return cli_usage("navigate", "--first-pose and --anchor-truth exclude each other");
     const char *input = argv[optind];
+    if (!vk && (vstride || viters != 2 || estimate_yaw || vinter != 1))
+        return cli_usage("navigate",
+                         "--interleave, --stride, --iterations and --estimate-yaw need --virtual-array");
+    if (vk) {
+        if (n_general)
+            return cli_usage("navigate", "--virtual-array takes only --interleave, --stride, --iterations, "
+                                         "--estimate-yaw, --k, --i, --cross-extent, --range-extent, "
+                                         "--threads and --json");
+        if (cli_mpi_size() > 1)
+            return cli_usage("navigate", "--virtual-array runs in one process (use --threads)");
+        sasnav_virtual_opts vo;
+        sasnav_virtual_default_opts(&vo);
+        vo.k = (int)vk;
+        vo.stride = (int)vstride;
+        vo.interleave = (int)vinter;
+        vo.iterations = (int)viters;
+        vo.nthreads = (int)threads;
+        vo.pair.k = (int)k;
+        vo.pair.i = (int)iters;
+        vo.pair.coarse_k = vo.pair.k;
+        vo.pair.coarse_i = vo.pair.i;
+        vo.pair.fix_yaw = !estimate_yaw;
+        vo.pair.cross_extent = have_cross ? no.pair.cross_extent : 0.0;
+        vo.pair.range_extent = have_range ? no.pair.range_extent : 0.0;
+        return navigate_virtual(input, output, &vo, json);
+    }
     no.pair.k = (int)k;
     no.pair.i = (int)iters;
     if (sasnav_pair_opts_check(&no.pair))

@@ -74,6 +74,7 @@ void sasnav_virtual_default_opts(sasnav_virtual_opts *opts)
     memset(opts, 0, sizeof *opts);
     opts->k = 4;
     opts->stride = 0;
+    opts->interleave = 1;
     sasnav_pair_default_opts(&opts->pair);
     /* The yaw of a group of omnidirectional pings shows only through its
      * channels' positions: held at the input navigation's (a gyro's). */
@@ -98,14 +99,14 @@ void sasnav_virtual_navigation_free(sasnav_virtual_navigation *nav)
     memset(nav, 0, sizeof *nav);
 }
 
-/* The data of the virtual ping made of pings first..first+k-1 (channel
- * j * n_rx + l = channel l of ping first + j). */
-static int virtual_data(const sasnav_run *run, int first, int k, sasnav_cfloat *out)
+/* The data of the virtual ping made of pings first + m j, j < k (channel
+ * j * n_rx + l = channel l of ping first + m j). */
+static int virtual_data(const sasnav_run *run, int first, int k, int m, sasnav_cfloat *out)
 {
     size_t per = sasnav_run_ping_size(run);
     for (int j = 0; j < k; j++) {
         const sasnav_cfloat *ping = NULL;
-        int rc = sasnav_run_get_ping(run, first + j, out + (size_t)j * per, &ping);
+        int rc = sasnav_run_get_ping(run, first + m * j, out + (size_t)j * per, &ping);
         if (rc) return rc;
         if (ping != out + (size_t)j * per) memcpy(out + (size_t)j * per, ping, per * sizeof *out);
     }
@@ -116,7 +117,7 @@ typedef struct {
     const sasnav_run *run;
     const sasnav_virtual_opts *o;
     sasnav_array varray;
-    int k, stride, n_groups, nv;
+    int k, stride, m, n_groups, nv;
     sasnav_ping_pose *layout_in;  /* n_groups * nv: local channel poses */
 } vctx;
 
@@ -125,14 +126,23 @@ static int estimate_pair(const vctx *c, sasnav_pair *est, sasnav_cfloat *dp, sas
                          int g, sasnav_virtual_pair *vp)
 {
     int fp = g * c->stride, fq = (g + 1) * c->stride;
-    int rc = virtual_data(c->run, fp, c->k, dp);
-    if (!rc) rc = virtual_data(c->run, fq, c->k, dq);
+    int rc = virtual_data(c->run, fp, c->k, c->m, dp);
+    if (!rc) rc = virtual_data(c->run, fq, c->k, c->m, dq);
     if (!rc)
         rc = sasnav_pair_set_data_channels(est, dp, dq, vp->nominal, c->layout_in + (size_t)g * c->nv,
                                            c->layout_in + (size_t)(g + 1) * c->nv);
     if (!rc) rc = sasnav_pair_estimate(est, &vp->est);
     if (rc) rc = sasnav_prefix_error(rc, "virtual pings at pings %d and %d", fp, fq);
     return rc;
+}
+
+/* Layout and centroid of the group of pings first + m j, j < k, with
+ * poses from `nav`; gather: k scratch poses. */
+static int group_layout(const vctx *c, const sasnav_ping_pose *nav, int first,
+                        sasnav_ping_pose *gather, sasnav_ping_pose *local, sasnav_pose *centroid)
+{
+    for (int j = 0; j < c->k; j++) gather[j] = nav[first + c->m * j];
+    return sasnav_virtual_layout(&c->run->array, gather, c->k, local, centroid);
 }
 
 /* One pass over the pairs with `nav` as the input navigation: layouts,
@@ -143,11 +153,12 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
     const sasnav_run *run = c->run;
     const sasnav_virtual_opts *opts = c->o;
     int ng = c->n_groups, rc = SASNAV_OK;
-    sasnav_ping_pose *scratch = malloc(sizeof *scratch * (size_t)c->nv);
+    sasnav_ping_pose *scratch = malloc(sizeof *scratch * (size_t)(c->nv + c->k));
     if (!scratch) return sasnav_set_error(SASNAV_ERR_NOMEM, "virtual arrays: out of memory");
+    sasnav_ping_pose *gather = scratch + c->nv;
     for (int g = 0; g < ng && !rc; g++)
-        rc = sasnav_virtual_layout(&run->array, nav + (size_t)g * c->stride, c->k,
-                                   c->layout_in + (size_t)g * c->nv, &out->centroid_in[g]);
+        rc = group_layout(c, nav, g * c->stride, gather, c->layout_in + (size_t)g * c->nv,
+                          &out->centroid_in[g]);
     for (int g = 0; g + 1 < ng && !rc; g++) {
         sasnav_virtual_pair *vp = &out->pairs[g];
         memset(vp, 0, sizeof *vp);
@@ -157,8 +168,8 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
         vp->truth = (sasnav_pose){NAN, NAN, NAN};
         if (run->truth) {
             sasnav_pose cp, cq;
-            rc = sasnav_virtual_layout(&run->array, run->truth + vp->first_p, c->k, scratch, &cp);
-            if (!rc) rc = sasnav_virtual_layout(&run->array, run->truth + vp->first_q, c->k, scratch, &cq);
+            rc = group_layout(c, run->truth, vp->first_p, gather, scratch, &cp);
+            if (!rc) rc = group_layout(c, run->truth, vp->first_q, gather, scratch, &cq);
             if (!rc) vp->truth = sasnav_pose_between(cp, cq);
         }
     }
@@ -217,7 +228,7 @@ static void apply_corrections(const vctx *c, const sasnav_ping_pose *nav,
                               const sasnav_virtual_navigation *v, sasnav_ping_pose *out)
 {
     int ng = c->n_groups;
-    double half = 0.5 * (c->k - 1);
+    double half = 0.5 * c->m * (c->k - 1);
     for (int i = 0; i < c->run->n_pings; i++) {
         double u = ((double)i - half) / c->stride; /* group coordinate */
         int g = (int)floor(u);
@@ -256,8 +267,11 @@ int sasnav_navigate_virtual(const sasnav_run *run, const sasnav_virtual_opts *op
     c.run = run;
     c.o = opts;
     c.k = opts->k;
-    c.stride = opts->stride > 0 ? opts->stride : opts->k;
+    c.m = opts->interleave;
     if (c.k < 1) return sasnav_set_error(SASNAV_ERR_ARG, "virtual arrays: k = %d must be >= 1", c.k);
+    if (c.m < 1 || c.m > 1000)
+        return sasnav_set_error(SASNAV_ERR_ARG, "virtual arrays: interleave = %d must be 1..1000", c.m);
+    c.stride = opts->stride > 0 ? opts->stride : c.m > 1 ? 1 : opts->k;
     if (opts->iterations < 1 || opts->iterations > 20)
         return sasnav_set_error(SASNAV_ERR_ARG, "virtual arrays: iterations = %d must be 1..20",
                                 opts->iterations);
@@ -265,16 +279,19 @@ int sasnav_navigate_virtual(const sasnav_run *run, const sasnav_virtual_opts *op
     if (rc) return rc;
     rc = sasnav_pair_opts_check(&opts->pair);
     if (rc) return rc;
-    c.n_groups = run->n_pings >= c.k ? (run->n_pings - c.k) / c.stride + 1 : 0;
+    long span = (long)c.m * (c.k - 1) + 1; /* pings a group spans */
+    c.n_groups = run->n_pings >= span ? (int)((run->n_pings - span) / c.stride + 1) : 0;
     if (c.n_groups < 2)
         return sasnav_set_error(SASNAV_ERR_ARG,
-                                "virtual arrays: %d pings make fewer than two groups of %d every %d",
-                                run->n_pings, c.k, c.stride);
+                                "virtual arrays: %d pings make fewer than two groups of %d pings "
+                                "(every %d) every %d",
+                                run->n_pings, c.k, c.m, c.stride);
     c.nv = c.varray.n_rx;
     int ng = c.n_groups;
     out->n_pings = run->n_pings;
     out->k = c.k;
     out->stride = c.stride;
+    out->interleave = c.m;
     out->n_groups = ng;
     out->n_pairs = ng - 1;
     out->pairs = calloc((size_t)ng, sizeof *out->pairs);

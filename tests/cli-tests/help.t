@@ -40,9 +40,11 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   placed off any image grid, with the true sensor poses, and writes them with
   the nominal and true navigation (docs/format.md).
   
-    --preset NAME    paper-pair | paper-trajectory | point | survey (default
-                     paper-trajectory; survey: a 300 kHz survey SAS over a
-                     100 m varied seabed, docs/config.md), or tank: the
+    --preset NAME    paper-pair | paper-trajectory | point | survey | circular
+                     (default paper-trajectory; survey: a 300 kHz survey
+                     SAS over a 100 m varied seabed; circular: a simulated
+                     AirSAS, one channel on a 0.85 m circle; docs/config.md),
+                     or tank: the
                      tank experiment as the recordings a user would have
                      (multichannel passband WAV per ping, chirp, positions;
                      'sasnav tank --help'), written into the directory -o DIR
@@ -217,6 +219,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                          [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]
                          [--threads N] [--json] [--checkpoint FILE]
                          [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5
+         sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]
+                         [--iterations N]
+                         [--estimate-yaw] [--k K] [--i I] [--cross-extent M]
+                         [--range-extent M] [--threads N] [--json] -o nav.h5
   
   Estimates the displacement of every consecutive ping pair, composes them
   into a trajectory starting at the run's nominal first ping, aligns it to
@@ -283,6 +289,32 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       command resumes from FILE and gives the same result
                       (docs/cli.md). FILE is removed once -o is written
     --json            machine-readable summary on stdout
+  
+  Virtual arrays (single-channel sonars, AirSAS; docs/navigation.md,
+  "Virtual arrays"): K consecutive pings form one virtual ping of K x N
+  channels, each with its own transmitter and receiver pose from the
+  input navigation; the motion between virtual pings S pings apart is
+  estimated and spread over the pings (corrections interpolated between
+  the groups' middle pings):
+    --virtual-array K pings per virtual ping (2..128 / channels)
+    --interleave M    a virtual ping takes every M-th ping (default 1);
+                      M = 2 with stride 1 compares interleaved groups
+                      (pings 0,2,4,.. with 1,3,5,..): their apertures
+                      overlap, 7-15x more precise than disjoint groups
+                      on the simulated AirSAS, at K x M ping spacings of
+                      aperture per group (keep it short enough for the
+                      scene: grating lobes)
+    --stride S        pings between virtual pings (default K when M = 1:
+                      disjoint groups; 1 when M > 1. Groups sharing pings
+                      tie the estimate to the input navigation)
+    --iterations N    passes, each on the previous pass's navigation
+                      (default 2)
+    --estimate-yaw    estimate each step's yaw too (default: held at the
+                      input navigation's: an omnidirectional group shows
+                      its yaw only through its length)
+    The estimation grid is square, centred at the run's range of interest,
+    --cross-extent / --range-extent default 0.35 x that range (0.3 m for
+    AirSAS); the search box is +-0.7 ping spacings in surge and sway.
     -o FILE           output navigation file (HDF5)
   
   Progress on stderr: a bar on a terminal, otherwise a line every 10 s
