@@ -7,7 +7,7 @@
  *                      [--pings N] [--first P] [--threads T] [--pixel M]
  *                      [--extent M] [--box SURGE,SWAY,YAW]
  *                      [--iterations N] [--interleave M] [--free-yaw]
- *                      [--motion-rms M] [--file run.h5 [--drift MM]] [--quiet]
+ *                      [--motion-rms M] [--write-nav PREFIX] [--closed] [--file run.h5 [--drift MM]] [--quiet]
  *
  * Simulated runs (default: seed 201, one run): the preset's smooth motion
  * errors are the truth, its nominal circle the input navigation. For each
@@ -85,8 +85,8 @@ int main(int argc, char **argv)
     long s0 = 201, ns = 1;
     double snr = 30.0, pixel = 0, extent = 0.3, drift_mm = 5.0, motion_rms = -1;
     double box[3] = {0.01, 0.01, 0.02};
-    int k = 4, stride = 0, n_pings = 0, first = 0, threads = 0, quiet = 0, free_yaw = 0, iterations = 2, interleave = 1;
-    const char *file = NULL;
+    int k = 4, stride = 0, n_pings = 0, first = 0, threads = 0, quiet = 0, free_yaw = 0, iterations = 2, interleave = 1, closed = 0;
+    const char *file = NULL, *write_prefix = NULL;
     for (int a = 1; a < argc; a++) {
         if (!strcmp(argv[a], "--seeds") && a + 2 < argc) {
             s0 = atol(argv[++a]);
@@ -114,6 +114,8 @@ int main(int argc, char **argv)
             file = argv[++a];
         } else if (!strcmp(argv[a], "--drift") && a + 1 < argc) {
             drift_mm = atof(argv[++a]);
+        } else if (!strcmp(argv[a], "--closed")) {
+            closed = 1;
         } else if (!strcmp(argv[a], "--interleave") && a + 1 < argc) {
             interleave = atoi(argv[++a]);
         } else if (!strcmp(argv[a], "--iterations") && a + 1 < argc) {
@@ -122,6 +124,8 @@ int main(int argc, char **argv)
             free_yaw = 1;
         } else if (!strcmp(argv[a], "--motion-rms") && a + 1 < argc) {
             motion_rms = atof(argv[++a]);
+        } else if (!strcmp(argv[a], "--write-nav") && a + 1 < argc) {
+            write_prefix = argv[++a];
         } else if (!strcmp(argv[a], "--quiet")) {
             quiet = 1;
         } else {
@@ -138,7 +142,7 @@ int main(int argc, char **argv)
            k, interleave, stride > 0 ? stride : interleave > 1 ? 1 : k, iterations, extent, box[0],
            box[1], box[2]);
     printf("# run  pairs  per-pair error rms: surge mm  sway mm  yaw mrad | worst: surge  sway | "
-           "not ok | input nav rms along/across mm (worst) -> estimated | s/pair\n");
+           "mean: surge sway | not ok | input nav rms along/across mm (worst) -> estimated | s/pair\n");
     int status = 0;
     for (long si = 0; si < ns; si++) {
         sasnav_run *full = NULL, *run = NULL;
@@ -196,6 +200,7 @@ int main(int argc, char **argv)
         if (free_yaw) vo.pair.fix_yaw = 0;
         vo.iterations = iterations;
         vo.interleave = interleave;
+        vo.closed = closed;
         sasnav_virtual_navigation vn;
         rc = sasnav_navigate_virtual(run, &vo, &vn);
         if (rc) {
@@ -204,13 +209,15 @@ int main(int argc, char **argv)
             status = 1;
             continue;
         }
-        double se[3] = {0, 0, 0}, we[2] = {0, 0};
+        double se[3] = {0, 0, 0}, we[2] = {0, 0}, me[2] = {0, 0};
         int not_ok = 0;
         for (int j = 0; j < vn.n_pairs; j++) {
             const sasnav_virtual_pair *vp = &vn.pairs[j];
             sasnav_pose d = vp->est.displacement;
             double e[3] = {d.x - vp->truth.x, d.y - vp->truth.y, sasnav_wrap_angle(d.theta - vp->truth.theta)};
             for (int c = 0; c < 3; c++) se[c] += e[c] * e[c];
+            me[0] += e[0];
+            me[1] += e[1];
             we[0] = fabs(e[0]) > we[0] ? fabs(e[0]) : we[0];
             we[1] = fabs(e[1]) > we[1] ? fabs(e[1]) : we[1];
             not_ok += vp->est.verdict != SASNAV_VERDICT_OK;
@@ -239,12 +246,25 @@ int main(int argc, char **argv)
         nav_errors(run, run->nav, run->truth, align, &ia, &ic, &iw);
         nav_errors(run, vn.nav, run->truth, align, &ea, &ec, &ew);
         int np = vn.n_pairs;
-        printf("%5s  %5d  %8.3f %8.3f %8.3f | %7.3f %7.3f | %3d | %6.3f %6.3f (%6.3f) -> %6.3f %6.3f "
-               "(%6.3f) | %.2f\n",
+        printf("%5s  %5d  %8.3f %8.3f %8.3f | %7.3f %7.3f | %+7.3f %+7.3f | %3d | %6.3f %6.3f (%6.3f) "
+               "-> %6.3f %6.3f (%6.3f) | %.2f\n",
                name, np, 1e3 * sqrt(se[0] / np), 1e3 * sqrt(se[1] / np), 1e3 * sqrt(se[2] / np),
-               1e3 * we[0], 1e3 * we[1], not_ok, 1e3 * ia, 1e3 * ic, 1e3 * iw, 1e3 * ea, 1e3 * ec,
-               1e3 * ew, vn.seconds / np);
+               1e3 * we[0], 1e3 * we[1], 1e3 * me[0] / np, 1e3 * me[1] / np, not_ok, 1e3 * ia,
+               1e3 * ic, 1e3 * iw, 1e3 * ea, 1e3 * ec, 1e3 * ew, vn.seconds / np / vn.iterations);
+        if (vn.closed)
+            printf("#   misclosure of the chained steps: %+.3f %+.3f mm, %+.3f mrad (spread over %d steps)\n",
+                   1e3 * vn.misclosure.x, 1e3 * vn.misclosure.y, 1e3 * vn.misclosure.theta, np);
         fflush(stdout);
+        if (write_prefix) {
+            /* PREFIX-input.h5 and PREFIX-estimated.h5 (sasnav image --nav). */
+            char path[1024];
+            snprintf(path, sizeof path, "%s-input.h5", write_prefix);
+            if (sasnav_nav_write(path, run->n_pings, run->nav, run->truth))
+                fprintf(stderr, "bench_virtual: %s\n", sasnav_last_error());
+            snprintf(path, sizeof path, "%s-estimated.h5", write_prefix);
+            if (sasnav_nav_write(path, run->n_pings, vn.nav, run->truth))
+                fprintf(stderr, "bench_virtual: %s\n", sasnav_last_error());
+        }
         sasnav_virtual_navigation_free(&vn);
         sasnav_run_free(run);
     }

@@ -81,6 +81,11 @@ typedef struct {
     sasnav_pair_opts pair;  /* the estimator's options (default: fix_yaw 1,
                                the rest sasnav_pair_default_opts; set range, pixel,
                                cross_extent and box for the layout) */
+    int closed;             /* 1: the track closes on itself (a full circle,
+                               a turntable): groups wrap round the end of
+                               the run, one more pair links the last group
+                               to the first, and the chain's misclosure is
+                               spread evenly over its steps (default 0) */
     int iterations;         /* passes (default 2): each pass takes the
                                previous one's navigation as its input, so
                                that the geometry inside the groups follows
@@ -101,7 +106,11 @@ typedef struct {
 typedef struct {
     int n_pings, k, stride, interleave;
     int n_groups;             /* virtual pings */
-    int n_pairs;              /* n_groups - 1 */
+    int n_pairs;              /* n_groups - 1 (n_groups when closed) */
+    int closed;
+    sasnav_pose misclosure;   /* closed: where the chained steps ended
+                                 minus where they started (world frame,
+                                 before it was spread) */
     sasnav_virtual_pair *pairs;
     sasnav_pose *centroid_in; /* n_groups: centroids from the input navigation */
     sasnav_pose *centroid;    /* n_groups: estimated (the first one anchored

@@ -106,7 +106,7 @@ static int virtual_data(const sasnav_run *run, int first, int k, int m, sasnav_c
     size_t per = sasnav_run_ping_size(run);
     for (int j = 0; j < k; j++) {
         const sasnav_cfloat *ping = NULL;
-        int rc = sasnav_run_get_ping(run, first + m * j, out + (size_t)j * per, &ping);
+        int rc = sasnav_run_get_ping(run, (first + m * j) % run->n_pings, out + (size_t)j * per, &ping);
         if (rc) return rc;
         if (ping != out + (size_t)j * per) memcpy(out + (size_t)j * per, ping, per * sizeof *out);
     }
@@ -117,7 +117,8 @@ typedef struct {
     const sasnav_run *run;
     const sasnav_virtual_opts *o;
     sasnav_array varray;
-    int k, stride, m, n_groups, nv;
+    int k, stride, m, n_groups, n_pairs, nv;
+    int closed;                   /* the track closes: pairs wrap round */
     sasnav_ping_pose *layout_in;  /* n_groups * nv: local channel poses */
 } vctx;
 
@@ -125,7 +126,7 @@ typedef struct {
 static int estimate_pair(const vctx *c, sasnav_pair *est, sasnav_cfloat *dp, sasnav_cfloat *dq,
                          int g, sasnav_virtual_pair *vp)
 {
-    int fp = g * c->stride, fq = (g + 1) * c->stride;
+    int fp = g * c->stride, fq = ((g + 1) % c->n_groups) * c->stride;
     int rc = virtual_data(c->run, fp, c->k, c->m, dp);
     if (!rc) rc = virtual_data(c->run, fq, c->k, c->m, dq);
     if (!rc)
@@ -141,7 +142,7 @@ static int estimate_pair(const vctx *c, sasnav_pair *est, sasnav_cfloat *dp, sas
 static int group_layout(const vctx *c, const sasnav_ping_pose *nav, int first,
                         sasnav_ping_pose *gather, sasnav_ping_pose *local, sasnav_pose *centroid)
 {
-    for (int j = 0; j < c->k; j++) gather[j] = nav[first + c->m * j];
+    for (int j = 0; j < c->k; j++) gather[j] = nav[(first + c->m * j) % c->run->n_pings];
     return sasnav_virtual_layout(&c->run->array, gather, c->k, local, centroid);
 }
 
@@ -159,12 +160,13 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
     for (int g = 0; g < ng && !rc; g++)
         rc = group_layout(c, nav, g * c->stride, gather, c->layout_in + (size_t)g * c->nv,
                           &out->centroid_in[g]);
-    for (int g = 0; g + 1 < ng && !rc; g++) {
+    for (int g = 0; g < c->n_pairs && !rc; g++) {
         sasnav_virtual_pair *vp = &out->pairs[g];
+        int h = (g + 1) % ng;
         memset(vp, 0, sizeof *vp);
         vp->first_p = g * c->stride;
-        vp->first_q = (g + 1) * c->stride;
-        vp->nominal = sasnav_pose_between(out->centroid_in[g], out->centroid_in[g + 1]);
+        vp->first_q = h * c->stride;
+        vp->nominal = sasnav_pose_between(out->centroid_in[g], out->centroid_in[h]);
         vp->truth = (sasnav_pose){NAN, NAN, NAN};
         if (run->truth) {
             sasnav_pose cp, cq;
@@ -177,7 +179,7 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
     if (rc) return rc;
 
     int nthreads = opts->nthreads > 0 ? opts->nthreads : omp_get_max_threads();
-    if (nthreads > ng - 1) nthreads = ng - 1;
+    if (nthreads > c->n_pairs) nthreads = c->n_pairs;
     int failed = 0, fail_rc = SASNAV_OK;
     char fail_msg[512] = "";
 #pragma omp parallel num_threads(nthreads)
@@ -190,7 +192,7 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
         int trc = dp && dq ? sasnav_pair_create(&run->sys, &c->varray, &run->win, &po, &est)
                            : sasnav_set_error(SASNAV_ERR_NOMEM, "virtual arrays: out of memory");
 #pragma omp for schedule(dynamic, 1)
-        for (int g = 0; g < ng - 1; g++) {
+        for (int g = 0; g < c->n_pairs; g++) {
             int stop;
 #pragma omp atomic read
             stop = failed;
@@ -213,6 +215,21 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
     out->centroid[0] = out->centroid_in[0];
     for (int g = 0; g + 1 < ng; g++)
         out->centroid[g + 1] = sasnav_pose_compose(out->centroid[g], out->pairs[g].est.displacement);
+    if (c->closed) {
+        /* The loop's last step should land on group 0: spread the
+         * misclosure evenly over the n steps (least squares with equal
+         * weights on the world-frame steps; yaw likewise). */
+        sasnav_pose end = sasnav_pose_compose(out->centroid[ng - 1], out->pairs[ng - 1].est.displacement);
+        double ex = end.x - out->centroid[0].x, ey = end.y - out->centroid[0].y;
+        double et = sasnav_wrap_angle(end.theta - out->centroid[0].theta);
+        out->misclosure = (sasnav_pose){ex, ey, et};
+        for (int g = 1; g < ng; g++) {
+            double f = (double)g / ng;
+            out->centroid[g].x -= f * ex;
+            out->centroid[g].y -= f * ey;
+            out->centroid[g].theta = sasnav_wrap_angle(out->centroid[g].theta - f * et);
+        }
+    }
     return SASNAV_OK;
 }
 
@@ -233,18 +250,20 @@ static void apply_corrections(const vctx *c, const sasnav_ping_pose *nav,
         double u = ((double)i - half) / c->stride; /* group coordinate */
         int g = (int)floor(u);
         double w = u - g;
-        if (g < 0) {
+        if (c->closed) {
+            g = ((g % ng) + ng) % ng; /* round the loop */
+        } else if (g < 0) {
             g = 0;
             w = 0;
         } else if (g >= ng - 1) {
             g = ng - 1;
             w = 0;
         }
+        int h = (g + 1) % ng;
         sasnav_pose d0 = sasnav_pose_compose(v->centroid[g], sasnav_pose_inverse(v->centroid_in[g]));
         sasnav_pose d = d0;
         if (w > 0) {
-            sasnav_pose d1 =
-                sasnav_pose_compose(v->centroid[g + 1], sasnav_pose_inverse(v->centroid_in[g + 1]));
+            sasnav_pose d1 = sasnav_pose_compose(v->centroid[h], sasnav_pose_inverse(v->centroid_in[h]));
             d.x = (1 - w) * d0.x + w * d1.x;
             d.y = (1 - w) * d0.y + w * d1.y;
             d.theta = d0.theta + w * sasnav_wrap_angle(d1.theta - d0.theta);
@@ -280,7 +299,26 @@ int sasnav_navigate_virtual(const sasnav_run *run, const sasnav_virtual_opts *op
     rc = sasnav_pair_opts_check(&opts->pair);
     if (rc) return rc;
     long span = (long)c.m * (c.k - 1) + 1; /* pings a group spans */
-    c.n_groups = run->n_pings >= span ? (int)((run->n_pings - span) / c.stride + 1) : 0;
+    c.closed = opts->closed != 0;
+    if (c.closed) {
+        /* Groups start every stride pings all round; the track must close:
+         * the last ping within two nominal steps of the first. */
+        double step = run->ping_spacing > 0 ? run->ping_spacing : 0.0;
+        sasnav_pose a = sasnav_ping_centroid(&run->nav[0]);
+        sasnav_pose b = sasnav_ping_centroid(&run->nav[run->n_pings - 1]);
+        if (run->n_pings % c.stride || span > run->n_pings / 2 ||
+            !(hypot(a.x - b.x, a.y - b.y) <= 2.0 * step))
+            return sasnav_set_error(SASNAV_ERR_ARG,
+                                    "virtual arrays: --closed needs a track whose last ping lies "
+                                    "within two steps of its first (%.4g m apart, step %.4g m), "
+                                    "a stride dividing the %d pings and groups spanning less than "
+                                    "half of them",
+                                    hypot(a.x - b.x, a.y - b.y), step, run->n_pings);
+        c.n_groups = run->n_pings / c.stride;
+    } else {
+        c.n_groups = run->n_pings >= span ? (int)((run->n_pings - span) / c.stride + 1) : 0;
+    }
+    c.n_pairs = c.closed ? c.n_groups : c.n_groups - 1;
     if (c.n_groups < 2)
         return sasnav_set_error(SASNAV_ERR_ARG,
                                 "virtual arrays: %d pings make fewer than two groups of %d pings "
@@ -293,7 +331,8 @@ int sasnav_navigate_virtual(const sasnav_run *run, const sasnav_virtual_opts *op
     out->stride = c.stride;
     out->interleave = c.m;
     out->n_groups = ng;
-    out->n_pairs = ng - 1;
+    out->n_pairs = c.n_pairs;
+    out->closed = c.closed;
     out->pairs = calloc((size_t)ng, sizeof *out->pairs);
     out->centroid_in = calloc((size_t)ng, sizeof *out->centroid_in);
     out->centroid = calloc((size_t)ng, sizeof *out->centroid);
