@@ -23,7 +23,7 @@ static const char *help =
     "                       [--threads N] [--json] [--checkpoint FILE]\n"
     "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
     "       sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]\n"
-    "                       [--iterations N]\n"
+    "                       [--iterations N] [--closed]\n"
     "                       [--estimate-yaw] [--k K] [--i I] [--cross-extent M]\n"
     "                       [--range-extent M] [--threads N] [--json] -o nav.h5\n"
     "\n"
@@ -112,6 +112,10 @@ static const char *help =
     "                    tie the estimate to the input navigation)\n"
     "  --iterations N    passes, each on the previous pass's navigation\n"
     "                    (default 2)\n"
+    "  --closed          the track closes on itself (a full circle, a\n"
+    "                    turntable): groups wrap round, one more pair links\n"
+    "                    the last group to the first and the misclosure is\n"
+    "                    spread over the steps (a scale error stays)\n"
     "  --estimate-yaw    estimate each step's yaw too (default: held at the\n"
     "                    input navigation's: an omnidirectional group shows\n"
     "                    its yaw only through its length)\n"
@@ -339,6 +343,8 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
         json_object_set_new(root, "virtual_array", json_integer(vn.k));
         json_object_set_new(root, "stride", json_integer(vn.stride));
         json_object_set_new(root, "interleave", json_integer(vn.interleave));
+        json_object_set_new(root, "closed", json_boolean(vn.closed));
+        if (vn.closed) json_object_set_new(root, "misclosure", pose_json(vn.misclosure));
         json_object_set_new(root, "iterations", json_integer(vn.iterations));
         json_object_set_new(root, "seconds", json_real(vn.seconds));
         for (int j = 0; j < vn.n_pairs; j++) {
@@ -376,6 +382,9 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
                        1e3 * (d.theta - t.theta));
             printf("  %s\n", sasnav_verdict_name(vp->est.verdict));
         }
+        if (vn.closed)
+            printf("loop misclosure %+.3f %+.3f mm, %+.3f mrad, spread over %d steps\n",
+                   1e3 * vn.misclosure.x, 1e3 * vn.misclosure.y, 1e3 * vn.misclosure.theta, vn.n_pairs);
         printf("%d pairs in %.2f s (%.2f s per pair), %d flagged\n", vn.n_pairs, vn.seconds,
                vn.n_pairs > 0 ? vn.seconds / (vn.n_pairs * vn.iterations) : 0.0, n_flagged);
     }
@@ -400,7 +409,7 @@ int cmd_navigate(int argc, char **argv)
         {"checkpoint", required_argument, 0, 'C'},
         {"virtual-array", required_argument, 0, 'V'}, {"stride", required_argument, 0, 'T'},
         {"iterations", required_argument, 0, 'I'}, {"estimate-yaw", no_argument, 0, 'W'},
-        {"interleave", required_argument, 0, 'G'},
+        {"interleave", required_argument, 0, 'G'}, {"closed", no_argument, 0, 'Z'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -410,7 +419,7 @@ int cmd_navigate(int argc, char **argv)
     long threads = 0, k = no.pair.k, iters = no.pair.i;
     int json = 0, opt, anchor_truth = 0, have_first = 0, n_general = 0, estimate_yaw = 0;
     long vk = 0, vstride = 0, viters = 2, vinter = 1;
-    int have_cross = 0, have_range = 0;
+    int have_cross = 0, have_range = 0, closed = 0;
     double first[3] = {0, 0, 0};
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
@@ -431,6 +440,7 @@ int cmd_navigate(int argc, char **argv)
             if (cli_parse_int(optarg, 1, 20, &viters)) return cli_usage("navigate", "--iterations needs 1..20");
             break;
         case 'W': estimate_yaw = 1; break;
+        case 'Z': closed = 1; break;
         case 'G':
             if (cli_parse_int(optarg, 1, 1000, &vinter)) return cli_usage("navigate", "--interleave needs 1..1000");
             break;
@@ -510,14 +520,14 @@ int cmd_navigate(int argc, char **argv)
     if (have_first && anchor_truth)
         return cli_usage("navigate", "--first-pose and --anchor-truth exclude each other");
     const char *input = argv[optind];
-    if (!vk && (vstride || viters != 2 || estimate_yaw || vinter != 1))
-        return cli_usage("navigate",
-                         "--interleave, --stride, --iterations and --estimate-yaw need --virtual-array");
+    if (!vk && (vstride || viters != 2 || estimate_yaw || vinter != 1 || closed))
+        return cli_usage("navigate", "--interleave, --stride, --iterations, --closed and "
+                                     "--estimate-yaw need --virtual-array");
     if (vk) {
         if (n_general)
-            return cli_usage("navigate", "--virtual-array takes only --interleave, --stride, --iterations, "
-                                         "--estimate-yaw, --k, --i, --cross-extent, --range-extent, "
-                                         "--threads and --json");
+            return cli_usage("navigate", "--virtual-array takes only --interleave, --stride, "
+                                         "--iterations, --closed, --estimate-yaw, --k, --i, "
+                                         "--cross-extent, --range-extent, --threads and --json");
         if (cli_mpi_size() > 1)
             return cli_usage("navigate", "--virtual-array runs in one process (use --threads)");
         sasnav_virtual_opts vo;
@@ -525,6 +535,7 @@ int cmd_navigate(int argc, char **argv)
         vo.k = (int)vk;
         vo.stride = (int)vstride;
         vo.interleave = (int)vinter;
+        vo.closed = closed;
         vo.iterations = (int)viters;
         vo.nthreads = (int)threads;
         vo.pair.k = (int)k;

@@ -139,6 +139,10 @@ fi
 [ $? -eq 2 ] || fail "--virtual-array 200: not a usage error"
 "$CLI" navigate "$T/run.h5" --virtual-array 2 -o "$T/x.h5" > /dev/null 2> "$T/few.err"
 [ $? -eq 1 ] && grep -q "fewer than two groups" "$T/few.err" || fail "3 pings in groups of 2: no clear failure"
+"$CLI" navigate "$T/circ.h5" --virtual-array 4 --closed -o "$T/x.h5" > /dev/null 2> "$T/open.err"
+[ $? -eq 1 ] && grep -q "closed needs a track" "$T/open.err" || fail "--closed on an open track: no clear failure"
+"$CLI" navigate "$T/run.h5" --closed -o "$T/x.h5" > /dev/null 2>&1
+[ $? -eq 2 ] || fail "--closed without --virtual-array: not a usage error"
 
 # Usage errors.
 "$CLI" navigate "$T/run.h5" --method kalman -o "$T/x.h5" > /dev/null 2>&1 && fail "unknown method accepted"

@@ -220,7 +220,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                          [--threads N] [--json] [--checkpoint FILE]
                          [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5
          sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]
-                         [--iterations N]
+                         [--iterations N] [--closed]
                          [--estimate-yaw] [--k K] [--i I] [--cross-extent M]
                          [--range-extent M] [--threads N] [--json] -o nav.h5
   
@@ -309,6 +309,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       tie the estimate to the input navigation)
     --iterations N    passes, each on the previous pass's navigation
                       (default 2)
+    --closed          the track closes on itself (a full circle, a
+                      turntable): groups wrap round, one more pair links
+                      the last group to the first and the misclosure is
+                      spread over the steps (a scale error stays)
     --estimate-yaw    estimate each step's yaw too (default: held at the
                       input navigation's: an omnidirectional group shows
                       its yaw only through its length)
