@@ -119,6 +119,7 @@ static const char *help =
     "  --estimate-yaw    estimate each step's yaw too (default: held at the\n"
     "                    input navigation's: an omnidirectional group shows\n"
     "                    its yaw only through its length)\n"
+    "  A flagged step (verdict not ok) keeps the input navigation's.\n"
     "  The estimation grid is square, centred at the run's range of interest,\n"
     "  --cross-extent / --range-extent default 0.35 x that range (0.3 m for\n"
     "  AirSAS); the search box is +-0.7 ping spacings in surge and sway.\n"
@@ -333,7 +334,9 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
         const sasnav_virtual_pair *vp = &vn.pairs[j];
         if (vp->est.verdict != SASNAV_VERDICT_OK) {
             n_flagged++;
-            fprintf(stderr, "sasnav navigate: warning: virtual pings at %d and %d: %s (eta %.3f)\n",
+            fprintf(stderr,
+                    "sasnav navigate: warning: virtual pings at %d and %d: %s (eta %.3f); the input "
+                    "navigation's step kept\n",
                     vp->first_p, vp->first_q, sasnav_verdict_name(vp->est.verdict), vp->est.eta);
         }
     }
@@ -356,6 +359,7 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
             json_object_set_new(o, "displacement", pose_json(vp->est.displacement));
             json_object_set_new(o, "truth", pose_json(vp->truth));
             json_object_set_new(o, "status", json_string(sasnav_verdict_name(vp->est.verdict)));
+            json_object_set_new(o, "used", json_boolean(vp->used));
             json_object_set_new(o, "eta", real_or_null(vp->est.eta));
             json_object_set_new(o, "seconds", json_real(vp->est.seconds));
             json_array_append_new(pairs, o);

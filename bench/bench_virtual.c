@@ -251,6 +251,7 @@ int main(int argc, char **argv)
                name, np, 1e3 * sqrt(se[0] / np), 1e3 * sqrt(se[1] / np), 1e3 * sqrt(se[2] / np),
                1e3 * we[0], 1e3 * we[1], 1e3 * me[0] / np, 1e3 * me[1] / np, not_ok, 1e3 * ia,
                1e3 * ic, 1e3 * iw, 1e3 * ea, 1e3 * ec, 1e3 * ew, vn.seconds / np / vn.iterations);
+        printf("#   flagged steps (input navigation's step kept): %d\n", vn.n_fallback);
         if (vn.closed)
             printf("#   misclosure of the chained steps: %+.3f %+.3f mm, %+.3f mrad (spread over %d steps)\n",
                    1e3 * vn.misclosure.x, 1e3 * vn.misclosure.y, 1e3 * vn.misclosure.theta, np);

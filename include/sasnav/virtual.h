@@ -28,7 +28,9 @@
  *   a shared ping holds the same samples in both virtual pings, so it
  *   pulls the estimate towards the input navigation's displacement (for
  *   which the shared channels coincide); they refine little.
- * The motion inside a group comes from the input navigation. The first
+ * The motion inside a group comes from the input navigation. A flagged
+ * estimate (verdict not "ok") is not used: that step keeps the input
+ * navigation's displacement. The first
  * group is anchored at its input centroid; each group's correction (its
  * estimated centroid against its input one) is interpolated between the
  * groups' middle pings and applied to every ping; further passes
@@ -101,6 +103,10 @@ typedef struct {
                                  from the input navigation */
     sasnav_pose truth;        /* the same from the run's truth (NaN: none) */
     sasnav_pair_result est;   /* the estimate (est.displacement) */
+    int used;                 /* 1: the estimate is "ok" and went into the
+                                 navigation; 0: it was flagged and the
+                                 input navigation's step was kept */
+    sasnav_pose step;         /* the displacement the navigation used */
 } sasnav_virtual_pair;
 
 typedef struct {
@@ -116,6 +122,8 @@ typedef struct {
     sasnav_pose *centroid;    /* n_groups: estimated (the first one anchored
                                  at its input value) */
     sasnav_ping_pose *nav;    /* n_pings: the estimated navigation */
+    int n_fallback;           /* steps of the last pass that kept the input
+                                 navigation's (flagged estimates) */
     int iterations;           /* passes made (pairs, centroid_in and
                                  centroid are the last pass's) */
     double seconds;           /* wall time */

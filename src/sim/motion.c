@@ -81,6 +81,9 @@ static sasnav_pose path_nominal(const sasnav_trajectory_params *tp, double s)
 static sasnav_pose path_pose(const sasnav_trajectory_params *tp, double s, double surge,
                              double sway, double yaw)
 {
+    /* The straight track as it always was (no rounding of a composition:
+     * the same bits as before circular tracks existed). */
+    if (!(tp->circle_radius > 0)) return (sasnav_pose){s + surge, sway, yaw};
     return sasnav_pose_compose(path_nominal(tp, s), (sasnav_pose){surge, sway, yaw});
 }
 

@@ -212,14 +212,23 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
         free(dq);
     }
     if (failed) return sasnav_set_error(fail_rc, "%s", fail_msg);
+    /* A step whose estimate is not "ok" (ambiguous, failed, no overlap)
+     * is not trusted: the chain takes the input navigation's step there. */
+    out->n_fallback = 0;
+    for (int g = 0; g < c->n_pairs; g++) {
+        sasnav_virtual_pair *vp = &out->pairs[g];
+        vp->used = vp->est.verdict == SASNAV_VERDICT_OK;
+        vp->step = vp->used ? vp->est.displacement : vp->nominal;
+        out->n_fallback += !vp->used;
+    }
     out->centroid[0] = out->centroid_in[0];
     for (int g = 0; g + 1 < ng; g++)
-        out->centroid[g + 1] = sasnav_pose_compose(out->centroid[g], out->pairs[g].est.displacement);
+        out->centroid[g + 1] = sasnav_pose_compose(out->centroid[g], out->pairs[g].step);
     if (c->closed) {
         /* The loop's last step should land on group 0: spread the
          * misclosure evenly over the n steps (least squares with equal
          * weights on the world-frame steps; yaw likewise). */
-        sasnav_pose end = sasnav_pose_compose(out->centroid[ng - 1], out->pairs[ng - 1].est.displacement);
+        sasnav_pose end = sasnav_pose_compose(out->centroid[ng - 1], out->pairs[ng - 1].step);
         double ex = end.x - out->centroid[0].x, ey = end.y - out->centroid[0].y;
         double et = sasnav_wrap_angle(end.theta - out->centroid[0].theta);
         out->misclosure = (sasnav_pose){ex, ey, et};
