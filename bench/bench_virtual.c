@@ -49,22 +49,13 @@ static pos_err err_in_frame(sasnav_pose est, sasnav_pose truth)
     return e;
 }
 
-/* Phase centre of a SISO/SIMO ping's first channel (planar). */
-static sasnav_pose ping_centre(const sasnav_array *a, const sasnav_ping_pose *p)
-{
-    double xr, yr;
-    sasnav_pose_apply(p->array, a->rx_u[0], 0.0, &xr, &yr);
-    sasnav_pose c = {0.5 * (xr + p->tx.x), 0.5 * (yr + p->tx.y), p->array.theta};
-    return c;
-}
-
 static void nav_errors(const sasnav_run *run, const sasnav_ping_pose *nav, const sasnav_ping_pose *truth,
                        sasnav_pose align, double *rms_along, double *rms_across, double *worst)
 {
     double sa = 0, sc = 0, w = 0;
     for (int i = 0; i < run->n_pings; i++) {
-        sasnav_pose e = sasnav_pose_compose(align, ping_centre(&run->array, &nav[i]));
-        pos_err d = err_in_frame(e, ping_centre(&run->array, &truth[i]));
+        sasnav_pose e = sasnav_pose_compose(align, sasnav_ping_centroid(&nav[i]));
+        pos_err d = err_in_frame(e, sasnav_ping_centroid(&truth[i]));
         sa += d.along * d.along;
         sc += d.across * d.across;
         double m = hypot(d.along, d.across);
