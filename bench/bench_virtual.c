@@ -8,6 +8,8 @@
  *                      [--extent M] [--box SURGE,SWAY,YAW]
  *                      [--iterations N] [--interleave M] [--free-yaw]
  *                      [--motion-rms M] [--write-nav PREFIX] [--closed] [--file run.h5 [--drift MM]] [--quiet]
+ *                      [--plot PREFIX] [--refine | --refine-only [--sweeps N] [--cg N] [--damping X]
+ *                       [--refine-pixel M] [--refine-half M] [--surge-range M] [--sway-range M]]
  *
  * Simulated runs (default: seed 201, one run): the preset's smooth motion
  * errors are the truth, its nominal circle the input navigation. For each
@@ -27,6 +29,7 @@
  * spacing in surge (simulated); drift removed to within 1 mm rms. */
 #include "sasnav/error.h"
 #include "sasnav/io.h"
+#include "sasnav/plot.h"
 #include "sasnav/refine.h"
 #include "sasnav/sim.h"
 #include "sasnav/virtual.h"
@@ -110,6 +113,60 @@ static void rigid_errors(const sasnav_run *run, const sasnav_ping_pose *nav, con
     *worst = wst;
 }
 
+/* Along / across position errors of each ping of `nav` against `truth`
+ * (after `align`, as nav_errors), mm. */
+static void per_ping_errors(const sasnav_run *run, const sasnav_ping_pose *nav, const sasnav_ping_pose *truth,
+                            sasnav_pose align, double *along, double *across)
+{
+    for (int i = 0; i < run->n_pings; i++) {
+        sasnav_pose e = sasnav_pose_compose(align, sasnav_ping_centroid(&nav[i]));
+        pos_err d = err_in_frame(e, sasnav_ping_centroid(&truth[i]));
+        along[i] = 1e3 * d.along;
+        across[i] = 1e3 * d.across;
+    }
+}
+
+/* PREFIX-steps.png: each step's surge and sway error against the truth;
+ * PREFIX-nav.png: each ping's along / across position error, input and
+ * estimated (and refined when given). */
+static void write_plots(const char *prefix, const sasnav_run *run, const sasnav_virtual_navigation *vn,
+                        sasnav_pose align, const sasnav_ping_pose *refined)
+{
+    int np = vn->n_pairs, n = run->n_pings;
+    double *buf = malloc(sizeof(double) * (size_t)(3 * np + 7 * n));
+    if (!buf) return;
+    double *xs = buf, *eu = buf + np, *ev = buf + 2 * np, *xp = buf + 3 * np;
+    double *ia = xp + n, *ic = ia + n, *ea = ic + n, *ec = ea + n, *ra = ec + n, *rc = ra + n;
+    for (int j = 0; j < np; j++) {
+        const sasnav_virtual_pair *vp = &vn->pairs[j];
+        xs[j] = vp->first_p;
+        eu[j] = 1e3 * (vp->est.displacement.x - vp->truth.x);
+        ev[j] = 1e3 * (vp->est.displacement.y - vp->truth.y);
+    }
+    for (int i = 0; i < n; i++) xp[i] = i;
+    char path[1100], title[256];
+    snprintf(path, sizeof path, "%s-steps.png", prefix);
+    snprintf(title, sizeof title, "step errors, K = %d every %d, %d steps", vn->k, vn->interleave, np);
+    const double *sx[2] = {xs, xs}, *sy[2] = {eu, ev};
+    const int sn[2] = {np, np};
+    const char *sl[2] = {"surge", "sway"};
+    sasnav_line_plot lp = {title, "first ping of the step", "error against the truth (mm)", 2, sn, sx, sy, sl, 0,
+                           NAN, NAN};
+    if (sasnav_plot_lines(path, &lp)) fprintf(stderr, "bench_virtual: %s\n", sasnav_last_error());
+    per_ping_errors(run, run->nav, run->truth, align, ia, ic);
+    per_ping_errors(run, vn->nav, run->truth, align, ea, ec);
+    if (refined) per_ping_errors(run, refined, run->truth, align, ra, rc);
+    snprintf(path, sizeof path, "%s-nav.png", prefix);
+    const double *nx[6] = {xp, xp, xp, xp, xp, xp}, *ny[6] = {ia, ic, ea, ec, ra, rc};
+    const int nn[6] = {n, n, n, n, n, n};
+    const char *nl[6] = {"input along", "input across", "estimated along", "estimated across", "refined along",
+                         "refined across"};
+    sasnav_line_plot lq = {"navigation error per ping", "ping", "position error (mm)", refined ? 6 : 4, nn, nx, ny,
+                           nl, 0, NAN, NAN};
+    if (sasnav_plot_lines(path, &lq)) fprintf(stderr, "bench_virtual: %s\n", sasnav_last_error());
+    free(buf);
+}
+
 typedef struct {
     int on, only, sweeps, cg;
     double pixel, half, surge_range, sway_range, damping;
@@ -171,8 +228,8 @@ int main(int argc, char **argv)
     long s0 = 201, ns = 1;
     double snr = 30.0, pixel = 0, extent = 0.3, drift_mm = 5.0, motion_rms = -1;
     double box[3] = {0.01, 0.01, 0.02};
-    int k = 4, stride = 0, n_pings = 0, first = 0, threads = 0, quiet = 0, free_yaw = 0, iterations = 2, interleave = 1, closed = 0;
-    const char *file = NULL, *write_prefix = NULL;
+    int k = 4, stride = 0, n_pings = 0, first = 0, threads = 0, quiet = 0, free_yaw = 0, iterations = 2, interleave = 1, closed = 0, keep_length = 0;
+    const char *file = NULL, *write_prefix = NULL, *plot_prefix = NULL;
     refine_cfg rf = {0, 0, 4, 0, 0.0025, 0.3, 0.012, 0.006, 0};
     for (int a = 1; a < argc; a++) {
         if (!strcmp(argv[a], "--seeds") && a + 2 < argc) {
@@ -203,6 +260,8 @@ int main(int argc, char **argv)
             drift_mm = atof(argv[++a]);
         } else if (!strcmp(argv[a], "--closed")) {
             closed = 1;
+        } else if (!strcmp(argv[a], "--keep-length")) {
+            keep_length = 1;
         } else if (!strcmp(argv[a], "--interleave") && a + 1 < argc) {
             interleave = atoi(argv[++a]);
         } else if (!strcmp(argv[a], "--iterations") && a + 1 < argc) {
@@ -213,6 +272,8 @@ int main(int argc, char **argv)
             motion_rms = atof(argv[++a]);
         } else if (!strcmp(argv[a], "--write-nav") && a + 1 < argc) {
             write_prefix = argv[++a];
+        } else if (!strcmp(argv[a], "--plot") && a + 1 < argc) {
+            plot_prefix = argv[++a];
         } else if (!strcmp(argv[a], "--refine")) {
             rf.on = 1;
         } else if (!strcmp(argv[a], "--refine-only")) {
@@ -306,6 +367,7 @@ int main(int argc, char **argv)
         vo.iterations = iterations;
         vo.interleave = interleave;
         vo.closed = closed;
+        vo.keep_length = keep_length;
         if (rf.only) {
             /* The refinement alone, from the input navigation (errors in
              * the world frame: no alignment). */
@@ -377,7 +439,8 @@ int main(int argc, char **argv)
                name, np, 1e3 * sqrt(se[0] / np), 1e3 * sqrt(se[1] / np), 1e3 * sqrt(se[2] / np),
                1e3 * we[0], 1e3 * we[1], 1e3 * me[0] / np, 1e3 * me[1] / np, not_ok, 1e3 * ia,
                1e3 * ic, 1e3 * iw, 1e3 * ea, 1e3 * ec, 1e3 * ew, vn.seconds / np / vn.iterations);
-        printf("#   flagged steps (input navigation's step kept): %d\n", vn.n_fallback);
+        printf("#   flagged steps (input navigation's step kept): %d; length scale %.5f\n", vn.n_fallback,
+               vn.length_scale);
         if (vn.closed)
             printf("#   misclosure of the chained steps: %+.3f %+.3f mm, %+.3f mrad (spread over %d steps)\n",
                    1e3 * vn.misclosure.x, 1e3 * vn.misclosure.y, 1e3 * vn.misclosure.theta, np);
@@ -392,20 +455,31 @@ int main(int argc, char **argv)
             if (sasnav_nav_write(path, run->n_pings, vn.nav, run->truth))
                 fprintf(stderr, "bench_virtual: %s\n", sasnav_last_error());
         }
+        sasnav_ping_pose *refined = NULL;
         if (rf.on) {
-            sasnav_ping_pose *out = malloc(sizeof *out * (size_t)run->n_pings);
-            rc = run_refine(run, vn.nav, &rf, threads, align, out);
+            refined = malloc(sizeof *refined * (size_t)run->n_pings);
+            rc = run_refine(run, vn.nav, &rf, threads, align, refined);
             if (rc) {
                 fprintf(stderr, "bench_virtual: %s\n", sasnav_last_error());
                 status = 1;
+                free(refined);
+                refined = NULL;
             } else if (write_prefix) {
                 char path[1024];
                 snprintf(path, sizeof path, "%s-refined.h5", write_prefix);
-                if (sasnav_nav_write(path, run->n_pings, out, run->truth))
+                if (sasnav_nav_write(path, run->n_pings, refined, run->truth))
                     fprintf(stderr, "bench_virtual: %s\n", sasnav_last_error());
             }
-            free(out);
         }
+        if (plot_prefix) {
+            char prefix[900];
+            if (ns > 1)
+                snprintf(prefix, sizeof prefix, "%s-%s", plot_prefix, name);
+            else
+                snprintf(prefix, sizeof prefix, "%s", plot_prefix);
+            write_plots(prefix, run, &vn, align, refined);
+        }
+        free(refined);
         sasnav_virtual_navigation_free(&vn);
         sasnav_run_free(run);
     }

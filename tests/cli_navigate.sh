@@ -118,6 +118,7 @@ import json, sys
 d = json.load(open(sys.argv[1]))
 assert d["virtual_array"] == 4 and d["stride"] == 4 and d["interleave"] == 1, d
 assert len(d["pairs"]) == 3, d["pairs"]
+assert d["length_scale"] == 1.0, d["length_scale"]
 for p in d["pairs"]:
     assert p["status"] in ("ok", "ambiguous", "failed", "no_overlap"), p
     assert abs(p["displacement"]["sway"] - p["truth"]["sway"]) < 0.001, p
@@ -143,6 +144,8 @@ fi
 [ $? -eq 1 ] && grep -q "closed needs a track" "$T/open.err" || fail "--closed on an open track: no clear failure"
 "$CLI" navigate "$T/run.h5" --closed -o "$T/x.h5" > /dev/null 2>&1
 [ $? -eq 2 ] || fail "--closed without --virtual-array: not a usage error"
+"$CLI" navigate "$T/run.h5" --keep-length -o "$T/x.h5" > /dev/null 2>&1
+[ $? -eq 2 ] || fail "--keep-length without --virtual-array: not a usage error"
 
 # Usage errors.
 "$CLI" navigate "$T/run.h5" --method kalman -o "$T/x.h5" > /dev/null 2>&1 && fail "unknown method accepted"

@@ -159,6 +159,38 @@ static void test_estimate(void)
     }
     printf("  moved groups: worst across-track error %.3f mm after (4 mm before)\n", 1e3 * worst);
     CHECK(worst < sway_bound, "moved groups back within 1 mm across track (%g mm)", 1e3 * worst);
+    CHECK(vn.length_scale == 1.0, "no length scale by default (%.17g)", vn.length_scale);
+
+    /* keep_length: the same estimates (bit for bit), the used steps'
+     * translations scaled by sum |nominal| / sum |estimate| (its
+     * definition, to rounding). */
+    sasnav_virtual_opts vk = vo;
+    vk.keep_length = 1;
+    sasnav_virtual_navigation vl;
+    CHECK_OK(sasnav_navigate_virtual(run, &vk, &vl));
+    if (vl.pairs && vl.n_pairs == vn.n_pairs) {
+        double ln = 0, le = 0, worst_step = 0;
+        int same = 1;
+        for (int j = 0; j < vl.n_pairs; j++) {
+            const sasnav_virtual_pair *a = &vn.pairs[j], *b = &vl.pairs[j];
+            same &= !memcmp(&a->est.displacement, &b->est.displacement, sizeof a->est.displacement);
+            if (!b->used) continue;
+            ln += hypot(b->nominal.x, b->nominal.y);
+            le += hypot(b->est.displacement.x, b->est.displacement.y);
+        }
+        double scale = ln / le;
+        for (int j = 0; j < vl.n_pairs; j++) {
+            const sasnav_virtual_pair *b = &vl.pairs[j];
+            if (!b->used) continue;
+            worst_step = fmax(worst_step, fabs(b->step.x - scale * b->est.displacement.x) +
+                                              fabs(b->step.y - scale * b->est.displacement.y) +
+                                              fabs(b->step.theta - b->est.displacement.theta));
+        }
+        CHECK(same, "keep_length: the same estimates");
+        CHECK(fabs(vl.length_scale - scale) < 1e-12 && worst_step < 1e-15 && vl.length_scale != 1.0,
+              "keep_length: scale %.9f (definition %.9f), steps off by %g", vl.length_scale, scale, worst_step);
+    }
+    sasnav_virtual_navigation_free(&vl);
     sasnav_virtual_navigation_free(&vn);
 
     /* Refusals. */

@@ -93,6 +93,19 @@ typedef struct {
                                that the geometry inside the groups follows
                                the estimates (1..20) */
     int nthreads;           /* pairs estimated at once (0: OpenMP default) */
+    int keep_length;        /* 1: the used estimates' translations are scaled
+                               by one factor so that their total length is
+                               the input navigation's over the same steps:
+                               the estimates give the track's shape, the
+                               input (an INS, a DVL, a turntable's nominal
+                               rate) its length. The estimator's steps are
+                               0.5-3 % too long on interleaved groups of
+                               omnidirectional pings (docs/airsas.md), and on
+                               a closed loop a uniform length error is a
+                               change of scale that the closure cannot see.
+                               Right only where the input's length is: a
+                               drift that returns, not an INS scale-factor
+                               error (default 0) */
 } sasnav_virtual_opts;
 
 void sasnav_virtual_default_opts(sasnav_virtual_opts *opts);
@@ -124,6 +137,8 @@ typedef struct {
     sasnav_ping_pose *nav;    /* n_pings: the estimated navigation */
     int n_fallback;           /* steps of the last pass that kept the input
                                  navigation's (flagged estimates) */
+    double length_scale;      /* the factor applied to the used steps'
+                                 translations (keep_length; 1 otherwise) */
     int iterations;           /* passes made (pairs, centroid_in and
                                  centroid are the last pass's) */
     double seconds;           /* wall time */

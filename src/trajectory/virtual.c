@@ -215,11 +215,24 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
     /* A step whose estimate is not "ok" (ambiguous, failed, no overlap)
      * is not trusted: the chain takes the input navigation's step there. */
     out->n_fallback = 0;
+    double len_in = 0, len_est = 0;
     for (int g = 0; g < c->n_pairs; g++) {
         sasnav_virtual_pair *vp = &out->pairs[g];
         vp->used = vp->est.verdict == SASNAV_VERDICT_OK;
         vp->step = vp->used ? vp->est.displacement : vp->nominal;
         out->n_fallback += !vp->used;
+        if (vp->used) {
+            len_in += hypot(vp->nominal.x, vp->nominal.y);
+            len_est += hypot(vp->step.x, vp->step.y);
+        }
+    }
+    /* keep_length: the used steps' length from the input navigation. */
+    out->length_scale = opts->keep_length && len_est > 0 && len_in > 0 ? len_in / len_est : 1.0;
+    for (int g = 0; g < c->n_pairs && out->length_scale != 1.0; g++) {
+        sasnav_virtual_pair *vp = &out->pairs[g];
+        if (!vp->used) continue;
+        vp->step.x *= out->length_scale;
+        vp->step.y *= out->length_scale;
     }
     out->centroid[0] = out->centroid_in[0];
     for (int g = 0; g + 1 < ng; g++)

@@ -220,7 +220,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                          [--threads N] [--json] [--checkpoint FILE]
                          [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5
          sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]
-                         [--iterations N] [--closed]
+                         [--iterations N] [--closed] [--keep-length]
                          [--estimate-yaw] [--k K] [--i I] [--cross-extent M]
                          [--range-extent M] [--threads N] [--json] -o nav.h5
   
@@ -313,6 +313,11 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       turntable): groups wrap round, one more pair links
                       the last group to the first and the misclosure is
                       spread over the steps (a scale error stays)
+    --keep-length     scale the estimated steps so that their total length
+                      is the input navigation's: the estimates give the
+                      track's shape, the input its length (the steps are
+                      0.5-3 % too long on AirSAS-like layouts; right only
+                      where the input's length is, docs/airsas.md)
     --estimate-yaw    estimate each step's yaw too (default: held at the
                       input navigation's: an omnidirectional group shows
                       its yaw only through its length)
