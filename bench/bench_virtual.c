@@ -7,7 +7,8 @@
  *                      [--pings N] [--first P] [--threads T] [--pixel M]
  *                      [--extent M] [--box SURGE,SWAY,YAW]
  *                      [--iterations N] [--interleave M] [--free-yaw]
- *                      [--motion-rms M] [--write-nav PREFIX] [--closed] [--file run.h5 [--drift MM]] [--quiet]
+ *                      [--motion-rms M] [--write-nav PREFIX] [--closed] [--keep-length]
+ *                      [--file run.h5 [--drift MM]] [--quiet]
  *                      [--plot PREFIX] [--refine | --refine-only [--sweeps N] [--cg N] [--damping X]
  *                       [--refine-pixel M] [--refine-half M] [--surge-range M] [--sway-range M]]
  *
@@ -24,7 +25,14 @@
  * navigation is it plus a smooth drift of --drift mm (default 5: surge
  * and sway, 2.5 and 1.5 cycles over the run's pings, zero at ping 0).
  *
- * Acceptance lines of the issue (docs/navigation.md, "Virtual arrays"):
+ * --keep-length: the steps scaled to the input navigation's length
+ * (virtual.h). --plot PREFIX: PREFIX-steps.png (each step's error) and
+ * PREFIX-nav.png (each ping's position error). --refine: the multi-ping
+ * refinement (refine.h, leave-one-out scenes on a square grid round the
+ * circle's centre) after the virtual navigation; --refine-only: instead of
+ * it (docs/airsas.md: why it does not work on these runs).
+ *
+ * Acceptance lines of the issue (docs/airsas.md, docs/navigation.md):
  * per-step motion within lambda/10 in sway and a quarter of the phase-centre
  * spacing in surge (simulated); drift removed to within 1 mm rms. */
 #include "sasnav/error.h"
@@ -32,6 +40,7 @@
 #include "sasnav/plot.h"
 #include "sasnav/refine.h"
 #include "sasnav/sim.h"
+#include "sasnav/trajectory.h"
 #include "sasnav/virtual.h"
 
 #include <math.h>
@@ -70,47 +79,13 @@ static void nav_errors(const sasnav_run *run, const sasnav_ping_pose *nav, const
     *worst = w;
 }
 
-/* Position errors after the rigid motion (translation, rotation about the
- * mean true position) that best fits the estimated phase-centre centroids
- * onto the true ones: what no self-navigation can observe, removed. */
-static void rigid_errors(const sasnav_run *run, const sasnav_ping_pose *nav, const sasnav_ping_pose *truth,
-                         double *rms_along, double *rms_across, double *worst)
+/* PREFIX-SUFFIX.h5: a navigation file (with the run's truth) for
+ * `sasnav image --nav`. */
+static void write_nav(const char *prefix, const char *suffix, const sasnav_run *run, const sasnav_ping_pose *nav)
 {
-    int n = run->n_pings;
-    double cx = 0, cy = 0, tx = 0, ty = 0;
-    for (int i = 0; i < n; i++) {
-        sasnav_pose t = sasnav_ping_centroid(&truth[i]), e = sasnav_ping_centroid(&nav[i]);
-        cx += t.x;
-        cy += t.y;
-        tx += e.x - t.x;
-        ty += e.y - t.y;
-    }
-    cx /= n;
-    cy /= n;
-    tx /= n;
-    ty /= n;
-    double num = 0, den = 0;
-    for (int i = 0; i < n; i++) {
-        sasnav_pose t = sasnav_ping_centroid(&truth[i]), e = sasnav_ping_centroid(&nav[i]);
-        double rx = t.x - cx, ry = t.y - cy, mx = e.x - t.x - tx, my = e.y - t.y - ty;
-        num += rx * my - ry * mx;
-        den += rx * rx + ry * ry;
-    }
-    double w = den > 0 ? num / den : 0, sa = 0, sc = 0, wst = 0;
-    for (int i = 0; i < n; i++) {
-        sasnav_pose t = sasnav_ping_centroid(&truth[i]), e = sasnav_ping_centroid(&nav[i]);
-        double rx = t.x - cx, ry = t.y - cy;
-        e.x -= tx - w * ry;
-        e.y -= ty + w * rx;
-        pos_err d = err_in_frame(e, t);
-        sa += d.along * d.along;
-        sc += d.across * d.across;
-        double m = hypot(d.along, d.across);
-        wst = m > wst ? m : wst;
-    }
-    *rms_along = sqrt(sa / n);
-    *rms_across = sqrt(sc / n);
-    *worst = wst;
+    char path[1100];
+    snprintf(path, sizeof path, "%s-%s.h5", prefix, suffix);
+    if (sasnav_nav_write(path, run->n_pings, nav, run->truth)) fprintf(stderr, "bench_virtual: %s\n", sasnav_last_error());
 }
 
 /* Along / across position errors of each ping of `nav` against `truth`
@@ -205,15 +180,14 @@ static int run_refine(const sasnav_run *run, const sasnav_ping_pose *start, cons
     for (int i = 0; i < rep.sweeps; i++)
         printf("#     sweep %d: misfit %.4f -> %.4f, rms move %.3f mm\n", i + 1, rep.misfit[i], rep.misfit[i + 1],
                1e3 * rep.rms_move[i]);
-    double a0, c0, w0, a1, c1, w1, ra0, rc0, rw0, ra1, rc1, rw1;
+    double a0, c0, w0, a1, c1, w1, ra0 = NAN, rc0 = NAN, ra1 = NAN, rc1 = NAN;
     nav_errors(run, start, run->truth, align, &a0, &c0, &w0);
     nav_errors(run, out, run->truth, align, &a1, &c1, &w1);
-    rigid_errors(run, start, run->truth, &ra0, &rc0, &rw0);
-    rigid_errors(run, out, run->truth, &ra1, &rc1, &rw1);
+    sasnav_traj_rms_rigid(start, run->truth, run->n_pings, &ra0, &rc0);
+    sasnav_traj_rms_rigid(out, run->truth, run->n_pings, &ra1, &rc1);
     printf("#   refined nav rms along/across mm (worst): %.3f %.3f (%.3f) -> %.3f %.3f (%.3f); "
-           "after the best rigid fit: %.3f %.3f (%.3f) -> %.3f %.3f (%.3f)\n",
-           1e3 * a0, 1e3 * c0, 1e3 * w0, 1e3 * a1, 1e3 * c1, 1e3 * w1, 1e3 * ra0, 1e3 * rc0, 1e3 * rw0,
-           1e3 * ra1, 1e3 * rc1, 1e3 * rw1);
+           "after the best rigid fit: %.3f %.3f -> %.3f %.3f\n",
+           1e3 * a0, 1e3 * c0, 1e3 * w0, 1e3 * a1, 1e3 * c1, 1e3 * w1, 1e3 * ra0, 1e3 * rc0, 1e3 * ra1, 1e3 * rc1);
     fflush(stdout);
     return SASNAV_OK;
 }
@@ -298,7 +272,10 @@ int main(int argc, char **argv)
         usage:
             fprintf(stderr, "usage: bench_virtual [--seeds S0 N] [--snr DB|inf] [--k K] [--stride S]\n"
                             "         [--pings N] [--first P] [--threads T] [--pixel M] [--extent M]\n"
-                            "         [--box SURGE,SWAY,YAW] [--iterations N] [--free-yaw] [--motion-rms M] [--file run.h5 [--drift MM]] [--quiet]\n");
+                            "         [--box SURGE,SWAY,YAW] [--iterations N] [--interleave M] [--closed] [--keep-length]\n"
+                            "         [--free-yaw] [--motion-rms M] [--file run.h5 [--drift MM]] [--write-nav PREFIX]\n"
+                            "         [--plot PREFIX] [--refine | --refine-only] [--sweeps N] [--cg N] [--damping X]\n"
+                            "         [--refine-pixel M] [--refine-half M] [--surge-range M] [--sway-range M] [--quiet]\n");
             return 2;
         }
     }
@@ -377,13 +354,8 @@ int main(int argc, char **argv)
                 fprintf(stderr, "bench_virtual: %s\n", sasnav_last_error());
                 status = 1;
             } else if (write_prefix) {
-                char path[1024];
-                snprintf(path, sizeof path, "%s-input.h5", write_prefix);
-                if (sasnav_nav_write(path, run->n_pings, run->nav, run->truth))
-                    fprintf(stderr, "bench_virtual: %s\n", sasnav_last_error());
-                snprintf(path, sizeof path, "%s-refined.h5", write_prefix);
-                if (sasnav_nav_write(path, run->n_pings, out, run->truth))
-                    fprintf(stderr, "bench_virtual: %s\n", sasnav_last_error());
+                write_nav(write_prefix, "input", run, run->nav);
+                write_nav(write_prefix, "refined", run, out);
             }
             free(out);
             sasnav_run_free(run);
@@ -447,13 +419,8 @@ int main(int argc, char **argv)
         fflush(stdout);
         if (write_prefix) {
             /* PREFIX-input.h5 and PREFIX-estimated.h5 (sasnav image --nav). */
-            char path[1024];
-            snprintf(path, sizeof path, "%s-input.h5", write_prefix);
-            if (sasnav_nav_write(path, run->n_pings, run->nav, run->truth))
-                fprintf(stderr, "bench_virtual: %s\n", sasnav_last_error());
-            snprintf(path, sizeof path, "%s-estimated.h5", write_prefix);
-            if (sasnav_nav_write(path, run->n_pings, vn.nav, run->truth))
-                fprintf(stderr, "bench_virtual: %s\n", sasnav_last_error());
+            write_nav(write_prefix, "input", run, run->nav);
+            write_nav(write_prefix, "estimated", run, vn.nav);
         }
         sasnav_ping_pose *refined = NULL;
         if (rf.on) {
@@ -465,10 +432,7 @@ int main(int argc, char **argv)
                 free(refined);
                 refined = NULL;
             } else if (write_prefix) {
-                char path[1024];
-                snprintf(path, sizeof path, "%s-refined.h5", write_prefix);
-                if (sasnav_nav_write(path, run->n_pings, refined, run->truth))
-                    fprintf(stderr, "bench_virtual: %s\n", sasnav_last_error());
+                write_nav(write_prefix, "refined", run, refined);
             }
         }
         if (plot_prefix) {
