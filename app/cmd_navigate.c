@@ -402,10 +402,17 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
     }
     /* Every step may say "ok" while the chain drifts: say so (measured,
      * docs/navigation.md "Virtual arrays"). */
-    fprintf(stderr,
-            "sasnav navigate: warning: virtual-array steps are biased in length (0.5-3 %% too long on "
-            "the simulated and real AirSAS); chained over a long run the navigation can end worse "
-            "than its input (docs/navigation.md, \"Virtual arrays\")\n");
+    if (vn.length_scale != 1.0)
+        fprintf(stderr,
+                "sasnav navigate: warning: the steps were scaled by %.5f to the input navigation's "
+                "length; their errors are correlated along the run, and chained over a long run the "
+                "navigation can end worse than its input (docs/airsas.md)\n",
+                vn.length_scale);
+    else
+        fprintf(stderr,
+                "sasnav navigate: warning: virtual-array steps are biased in length (0.5-3 %% too long on "
+                "the simulated and real AirSAS; --keep-length takes the length from the input); chained "
+                "over a long run the navigation can end worse than its input (docs/airsas.md)\n");
     fprintf(stderr, "sasnav navigate: %d pings -> %s\n", vn.n_pings, output);
     sasnav_virtual_navigation_free(&vn);
     sasnav_run_free(run);
