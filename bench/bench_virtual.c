@@ -112,18 +112,22 @@ static void write_plots(const char *prefix, const sasnav_run *run, const sasnav_
     if (!buf) return;
     double *xs = buf, *eu = buf + np, *ev = buf + 2 * np, *xp = buf + 3 * np;
     double *ia = xp + n, *ic = ia + n, *ea = ic + n, *ec = ea + n, *ra = ec + n, *rc = ra + n;
+    int nu = 0; /* the used steps: a flagged one is not in the navigation */
     for (int j = 0; j < np; j++) {
         const sasnav_virtual_pair *vp = &vn->pairs[j];
-        xs[j] = vp->first_p;
-        eu[j] = 1e3 * (vp->est.displacement.x - vp->truth.x);
-        ev[j] = 1e3 * (vp->est.displacement.y - vp->truth.y);
+        if (!vp->used) continue;
+        xs[nu] = vp->first_p;
+        eu[nu] = 1e3 * (vp->est.displacement.x - vp->truth.x);
+        ev[nu] = 1e3 * (vp->est.displacement.y - vp->truth.y);
+        nu++;
     }
     for (int i = 0; i < n; i++) xp[i] = i;
     char path[1100], title[256];
     snprintf(path, sizeof path, "%s-steps.png", prefix);
-    snprintf(title, sizeof title, "step errors, K = %d every %d, %d steps", vn->k, vn->interleave, np);
+    snprintf(title, sizeof title, "step errors, K = %d every %d, %d steps (%d flagged, not shown)", vn->k,
+             vn->interleave, np, np - nu);
     const double *sx[2] = {xs, xs}, *sy[2] = {eu, ev};
-    const int sn[2] = {np, np};
+    const int sn[2] = {nu, nu};
     const char *sl[2] = {"surge", "sway"};
     sasnav_line_plot lp = {title, "first ping of the step", "error against the truth (mm)", 2, sn, sx, sy, sl, 0,
                            NAN, NAN};
