@@ -124,7 +124,10 @@ static const char *help =
     "  --estimate-yaw    estimate each step's yaw too (default: held at the\n"
     "                    input navigation's: an omnidirectional group shows\n"
     "                    its yaw only through its length)\n"
-    "  A flagged step (verdict not ok) keeps the input navigation's.\n"
+    "  A flagged step (verdict not ok) keeps the input navigation's. The steps\n"
+    "  correct jumps and ping-to-ping errors of the input, not a smooth drift:\n"
+    "  both groups of a pair carry the input's layout error alike\n"
+    "  (docs/airsas.md).\n"
     "  The estimation grid is square, centred at the run's range of interest,\n"
     "  --cross-extent / --range-extent default 0.35 x that range (0.3 m for\n"
     "  AirSAS); the search box is +-0.7 ping spacings in surge and sway.\n"
@@ -405,14 +408,16 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
     if (vn.length_scale != 1.0)
         fprintf(stderr,
                 "sasnav navigate: warning: the steps were scaled by %.5f to the input navigation's "
-                "length; their errors are correlated along the run, and chained over a long run the "
-                "navigation can end worse than its input (docs/airsas.md)\n",
+                "length; virtual-array steps keep a smooth drift of the input (their layouts are the "
+                "input's) and their errors add up along the run: the navigation can end worse than "
+                "its input (docs/airsas.md)\n",
                 vn.length_scale);
     else
         fprintf(stderr,
-                "sasnav navigate: warning: virtual-array steps are biased in length (0.5-3 %% too long on "
-                "the simulated and real AirSAS; --keep-length takes the length from the input); chained "
-                "over a long run the navigation can end worse than its input (docs/airsas.md)\n");
+                "sasnav navigate: warning: virtual-array steps keep a smooth drift of the input (their "
+                "layouts are the input's) and are biased in length (0.5-3 %% too long on the simulated "
+                "and real AirSAS; --keep-length takes the length from the input); chained over a long "
+                "run the navigation can end worse than its input (docs/airsas.md)\n");
     fprintf(stderr, "sasnav navigate: %d pings -> %s\n", vn.n_pings, output);
     sasnav_virtual_navigation_free(&vn);
     sasnav_run_free(run);

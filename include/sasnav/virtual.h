@@ -37,7 +37,11 @@
  * (iterations) start from that navigation, so that the geometry inside the
  * groups follows the estimates. Relative navigation: the per-step errors
  * accumulate along the run (a random walk, and a drift where they have a
- * bias).
+ * bias). The layouts come from the input: an input error that is smooth
+ * over a group (an INS-like drift) distorts both groups of a pair alike,
+ * and the estimate keeps it (88-99 % of the input's step error,
+ * docs/airsas.md); what the steps correct is an error not shared by the
+ * two groups (a jump, a wrong ping).
  *
  * Threads: sasnav_navigate_virtual runs opts.nthreads pairs at once (one
  * estimator per thread); results do not depend on the number. The other

@@ -321,7 +321,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --estimate-yaw    estimate each step's yaw too (default: held at the
                       input navigation's: an omnidirectional group shows
                       its yaw only through its length)
-    A flagged step (verdict not ok) keeps the input navigation's.
+    A flagged step (verdict not ok) keeps the input navigation's. The steps
+    correct jumps and ping-to-ping errors of the input, not a smooth drift:
+    both groups of a pair carry the input's layout error alike
+    (docs/airsas.md).
     The estimation grid is square, centred at the run's range of interest,
     --cross-extent / --range-extent default 0.35 x that range (0.3 m for
     AirSAS); the search box is +-0.7 ping spacings in surge and sway.
