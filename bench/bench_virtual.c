@@ -79,6 +79,23 @@ static void nav_errors(const sasnav_run *run, const sasnav_ping_pose *nav, const
     *worst = w;
 }
 
+/* Least-squares slope b of y on x (y ~ a + b x) and the correlation. */
+static void regress(const double *x, const double *y, int n, double *slope, double *corr)
+{
+    double mx = 0, my = 0, sxx = 0, syy = 0, sxy = 0;
+    for (int i = 0; i < n; i++) {
+        mx += x[i] / n;
+        my += y[i] / n;
+    }
+    for (int i = 0; i < n; i++) {
+        sxx += (x[i] - mx) * (x[i] - mx);
+        syy += (y[i] - my) * (y[i] - my);
+        sxy += (x[i] - mx) * (y[i] - my);
+    }
+    *slope = sxx > 0 ? sxy / sxx : NAN;
+    *corr = sxx > 0 && syy > 0 ? sxy / sqrt(sxx * syy) : NAN;
+}
+
 /* PREFIX-SUFFIX.h5: a navigation file (with the run's truth) for
  * `sasnav image --nav`. */
 static void write_nav(const char *prefix, const char *suffix, const sasnav_run *run, const sasnav_ping_pose *nav)
@@ -417,6 +434,34 @@ int main(int argc, char **argv)
                1e3 * ic, 1e3 * iw, 1e3 * ea, 1e3 * ec, 1e3 * ew, vn.seconds / np / vn.iterations);
         printf("#   flagged steps (input navigation's step kept): %d; length scale %.5f\n", vn.n_fallback,
                vn.length_scale);
+        {
+            /* How much of the input's step error each estimate keeps: the
+             * used steps' estimate error regressed on the input's error
+             * over the same step (docs/airsas.md, cause 1). */
+            double *buf = malloc(sizeof(double) * 4 * (size_t)np);
+            int nu = 0;
+            for (int j = 0; j < np; j++) {
+                const sasnav_virtual_pair *vp = &vn.pairs[j];
+                if (!vp->used) continue;
+                buf[nu] = vp->nominal.x - vp->truth.x;
+                buf[np + nu] = vp->est.displacement.x - vp->truth.x;
+                buf[2 * np + nu] = vp->nominal.y - vp->truth.y;
+                buf[3 * np + nu] = vp->est.displacement.y - vp->truth.y;
+                nu++;
+            }
+            double bu, ru, bv, rv;
+            regress(buf, buf + np, nu, &bu, &ru);
+            regress(buf + 2 * np, buf + 3 * np, nu, &bv, &rv);
+            double iu = 0, iv = 0;
+            for (int j = 0; j < nu; j++) {
+                iu += buf[j] * buf[j] / nu;
+                iv += buf[2 * np + j] * buf[2 * np + j] / nu;
+            }
+            printf("#   estimate error = b x input error per step: surge b %.3f (corr %.3f), sway b %.3f "
+                   "(corr %.3f); input step error rms %.3f / %.3f mm\n",
+                   bu, ru, bv, rv, 1e3 * sqrt(iu), 1e3 * sqrt(iv));
+            free(buf);
+        }
         if (vn.closed)
             printf("#   misclosure of the chained steps: %+.3f %+.3f mm, %+.3f mrad (spread over %d steps)\n",
                    1e3 * vn.misclosure.x, 1e3 * vn.misclosure.y, 1e3 * vn.misclosure.theta, np);

@@ -39,7 +39,7 @@
  * accumulate along the run (a random walk, and a drift where they have a
  * bias). The layouts come from the input: an input error that is smooth
  * over a group (an INS-like drift) distorts both groups of a pair alike,
- * and the estimate keeps it (88-99 % of the input's step error,
+ * and the estimate keeps it (89-99.6 % of the input's step error,
  * docs/airsas.md); what the steps correct is an error not shared by the
  * two groups (a jump, a wrong ping).
  *
