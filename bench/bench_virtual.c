@@ -439,6 +439,10 @@ int main(int argc, char **argv)
              * used steps' estimate error regressed on the input's error
              * over the same step (docs/airsas.md, cause 1). */
             double *buf = malloc(sizeof(double) * 4 * (size_t)np);
+            if (!buf) {
+                fprintf(stderr, "bench_virtual: out of memory\n");
+                return 1;
+            }
             int nu = 0;
             for (int j = 0; j < np; j++) {
                 const sasnav_virtual_pair *vp = &vn.pairs[j];
