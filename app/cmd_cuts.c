@@ -86,7 +86,9 @@ static int cuts_of_run(const char *input, long p, long q, const double *around, 
     po->tx_lag = run->tx_lag;
     sasnav_pair *pair = NULL;
     rc = sasnav_pair_create(&run->sys, &run->array, &run->win, po, &pair);
-    if (!rc) rc = sasnav_pair_set_data(pair, sasnav_run_ping(run, (int)p), sasnav_run_ping(run, (int)q), nominal);
+    if (!rc)
+        rc = sasnav_pair_set_data_run(pair, run, (int)p, (int)q, sasnav_run_ping(run, (int)p),
+                                      sasnav_run_ping(run, (int)q), nominal, NULL);
     sasnav_run_free(run);
     if (rc) {
         sasnav_pair_destroy(pair);

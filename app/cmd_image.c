@@ -78,7 +78,7 @@ static int image_one_ping(const sasnav_run *run, const sasnav_ping_pose *pose, i
     int rc = sasnav_op_create(&run->sys, &run->array, &run->win, (int)np, x, y, oo, &op);
     free(x);
     free(y);
-    if (!rc) rc = sasnav_op_set_geometry(op, pose);
+    if (!rc) rc = sasnav_op_set_ping(op, pose, run->channel_offset);
     const sasnav_cfloat *data = NULL;
     sasnav_cfloat *buf = malloc(sizeof *buf * sasnav_run_ping_size(run));
     if (!rc) rc = buf ? sasnav_run_get_ping(run, p, buf, &data) : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");

@@ -203,6 +203,7 @@ static void print_json(const char *input, const sasnav_navigation *nav)
     json_object_set_new(root, "flagged_pairs", json_integer(nav->n_flagged));
     json_object_set_new(root, "resolved_pairs", json_integer(nav->n_resolved));
     json_object_set_new(root, "aiding_used", json_boolean(nav->aiding_used));
+    json_object_set_new(root, "gyro_tx_yaw", json_boolean(nav->gyro_tx_yaw));
     json_object_set_new(root, "skipped_long_baselines", json_integer(nav->n_skipped));
     json_object_set_new(root, "has_truth", json_boolean(nav->has_truth));
     if (nav->has_truth) {
@@ -670,6 +671,7 @@ int cmd_navigate(int argc, char **argv)
         }
     }
     rc = sasnav_nav_write(output, nav.n_pings, written, run->truth);
+    int channel_tx = run->channel_offset != NULL;
     sasnav_run_free(run);
     if (rc) {
         sasnav_navigation_free(&nav);
@@ -703,6 +705,11 @@ int cmd_navigate(int argc, char **argv)
     if (nav.n_skipped > 0)
         fprintf(stderr, "sasnav navigate: %d long baselines skipped (< 2 phase centres overlap)\n",
                 nav.n_skipped);
+    if (channel_tx && nav.method == SASNAV_METHOD_SUBSPACE && !nav.gyro_tx_yaw)
+        fprintf(stderr,
+                "sasnav navigate: warning: the channels have transmitters of their own and no gyro is used: "
+                "the vehicle's yaw between transmission and reception is taken as zero (it moves each "
+                "transmitter sideways by its lever arm x that yaw; docs/model.md, \"Channel layouts\")\n");
     if (json) print_json(input, &nav);
     else print_text(&nav);
     fprintf(stderr, "sasnav navigate: %d pings -> %s\n", nav.n_pings, output);

@@ -240,16 +240,11 @@ int cmd_simulate(int argc, char **argv)
     if (cli_mpi_size() > 1) return simulate_distributed(&sc, scene, &oo, output);
     /* Streamed: each ping is written as it is made (memory: the scene and
      * one ping, whatever the run's length). */
-    sasnav_window win;
-    rc = sasnav_window_for_ranges(&sc.sys, sc.range_min, sc.range_max, 8, &win);
-    sasnav_run shape;
-    memset(&shape, 0, sizeof shape);
-    shape.sys = sc.sys;
-    shape.array = sc.array;
-    shape.win = win;
-    shape.n_pings = sc.traj.n_pings;
+    sasnav_run *shape = NULL; /* shapes, window, channel offsets (the format version) */
+    rc = sasnav_scenario_header(&sc, &shape);
     sasnav_run_writer *w = NULL;
-    if (!rc) rc = sasnav_run_writer_open(output, &shape, &w);
+    if (!rc) rc = sasnav_run_writer_open(output, shape, &w);
+    sasnav_run_free(shape);
     if (rc) {
         sasnav_scene_free(scene);
         return cli_fail("simulate", rc, "cannot write %s", output);

@@ -21,6 +21,9 @@ function run = sasnav_read_run(file)
 %   run.truth.tx, run.truth.array    the same (only when /truth exists)
 %   run.aiding.time, .yaw_rate, .yaw_rate_sigma (n_pings x 1) and
 %   .velocity, .velocity_sigma (n_pings x 2)  (only what /aiding holds)
+%   run.channels.tx, run.channels.array   n_rx x 3: each channel's
+%                      transmitter and array pose relative to its ping's
+%                      (format version 2, only when /channels exists)
 %   run.format, run.format_version, run.created_by   root attributes
 %   run.attributes.<dataset>   attributes of each dataset, e.g.
 %                      run.attributes.nav_tx.units = 'm, m, rad'

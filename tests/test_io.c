@@ -141,6 +141,10 @@ static int runs_identical(const sasnav_run *a, const sasnav_run *b)
     if (memcmp(a->nav, b->nav, a->n_pings * sizeof *a->nav) != 0) return 0;
     if (!a->truth != !b->truth) return 0;
     if (a->truth && memcmp(a->truth, b->truth, a->n_pings * sizeof *a->truth) != 0) return 0;
+    if (!a->channel_offset != !b->channel_offset) return 0;
+    if (a->channel_offset &&
+        memcmp(a->channel_offset, b->channel_offset, a->array.n_rx * sizeof *a->channel_offset) != 0)
+        return 0;
     return 1;
 }
 
@@ -481,6 +485,124 @@ static void test_aiding(void)
     sasnav_run_free(run);
 }
 
+static int file_version(const char *path)
+{
+    int v = -1;
+    hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    hid_t a = f >= 0 ? H5Aopen(f, "format_version", H5P_DEFAULT) : -1;
+    if (a >= 0) {
+        H5Aread(a, H5T_NATIVE_INT, &v);
+        H5Aclose(a);
+    }
+    if (f >= 0) H5Fclose(f);
+    return v;
+}
+
+/* Format version 2: per-channel offsets (/channels) round-trip bit for bit
+ * through the whole-run and ping-by-ping writers and both readers; a run
+ * without them is still written as version 1; version-1 files with
+ * /channels, wrong shapes and non-finite offsets are refused. */
+static void test_channels(void)
+{
+    sasnav_run *run = random_run(320, 5, 4, 16, 1), *back = NULL;
+    if (!run) return;
+    const char *v1 = tmp_file("channels-v1.h5");
+    CHECK_OK(sasnav_run_write(v1, run));
+    CHECK(file_version(v1) == 1, "a run without channel offsets written as version %d", file_version(v1));
+    CHECK_OK(sasnav_run_read(v1, &back));
+    CHECK(back && back->channel_offset == NULL, "a version-1 file read with channel offsets");
+    sasnav_run_free(back);
+    back = NULL;
+
+    sasnav_ping_pose off[4];
+    for (int l = 0; l < 4; l++) {
+        off[l].tx = (sasnav_pose){rng_uniform(-0.3, 0.3), rng_uniform(-0.05, 0.05), rng_uniform(-0.1, 0.1)};
+        off[l].array = (sasnav_pose){rng_uniform(-0.1, 0.1), rng_uniform(-0.05, 0.05), rng_uniform(-0.1, 0.1)};
+    }
+    CHECK_OK(sasnav_run_set_channel_offset(run, off));
+    const char *v2 = tmp_file("channels-v2.h5");
+    CHECK_OK(sasnav_run_write(v2, run));
+    CHECK(file_version(v2) == 2, "a run with channel offsets written as version %d", file_version(v2));
+    CHECK_OK(sasnav_run_read(v2, &back));
+    CHECK(back && runs_identical(run, back), "channel offsets: round trip is not bit-exact");
+    sasnav_run_free(back);
+    back = NULL;
+    CHECK_OK(sasnav_run_open(v2, &back)); /* streamed: the same header */
+    CHECK(back && back->channel_offset &&
+              memcmp(back->channel_offset, off, sizeof off) == 0,
+          "channel offsets: streamed open lost them");
+    sasnav_run_free(back);
+    back = NULL;
+
+    /* Ping by ping: the writer takes the version from its header. */
+    const char *w2 = tmp_file("channels-writer.h5");
+    sasnav_run_writer *w = NULL;
+    CHECK_OK(sasnav_run_writer_open(w2, run, &w));
+    for (int p = 0; w && p < run->n_pings; p++) CHECK_OK(sasnav_run_writer_put(w, p, sasnav_run_ping(run, p)));
+    if (w) CHECK_OK(sasnav_run_writer_finish(w, run));
+    CHECK_OK(sasnav_run_read(w2, &back));
+    CHECK(back && runs_identical(run, back) && file_version(w2) == 2, "channel offsets: writer round trip");
+    sasnav_run_free(back);
+    back = NULL;
+    sasnav_run plain = *run; /* opened without offsets, finished with them */
+    plain.channel_offset = NULL;
+    w = NULL;
+    CHECK_OK(sasnav_run_writer_open(tmp_file("channels-mismatch.h5"), &plain, &w));
+    for (int p = 0; w && p < run->n_pings; p++) CHECK_OK(sasnav_run_writer_put(w, p, sasnav_run_ping(run, p)));
+    if (w) CHECK_FAILS(sasnav_run_writer_finish(w, run), SASNAV_ERR_ARG);
+    CHECK(dir_count(test_tmpdir(), "channels-mismatch") == 0, "a refused writer left a file");
+
+    /* A subset keeps the offsets of the channels it keeps. */
+    int pings[2] = {3, 1}, chans[2] = {2, 0};
+    sasnav_run *sub = NULL;
+    CHECK_OK(sasnav_run_subset(run, pings, 2, chans, 2, &sub));
+    CHECK(sub && sub->channel_offset && memcmp(&sub->channel_offset[0], &off[2], sizeof off[0]) == 0 &&
+              memcmp(&sub->channel_offset[1], &off[0], sizeof off[0]) == 0,
+          "subset: channel offsets not carried");
+    sasnav_run_free(sub);
+
+    /* Bad offsets in memory and in files. */
+    sasnav_ping_pose bad[4];
+    memcpy(bad, off, sizeof bad);
+    bad[1].array.theta = NAN;
+    CHECK_FAILS(sasnav_run_set_channel_offset(run, bad), SASNAV_ERR_ARG);
+    bad[1].array.theta = 0;
+    bad[2].tx.x = 1e6;
+    CHECK_FAILS(sasnav_run_set_channel_offset(run, bad), SASNAV_ERR_ARG);
+    struct {
+        const char *name, *expect;
+        int kind; /* 0 version 1 with /channels, 1 NaN, 2 wrong count, 3 one dataset missing */
+    } cases[] = {{"channels-badversion.h5", "format_version 2", 0},
+                 {"channels-nan.h5", "not finite", 1},
+                 {"channels-count.h5", "channels", 2},
+                 {"channels-missing.h5", "/channels/array", 3}};
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        const char *path = tmp_file(cases[c].name);
+        CHECK_OK(sasnav_run_write(path, run));
+        hid_t f = open_rw(path);
+        double v = NAN;
+        switch (cases[c].kind) {
+        case 0: set_attr_int(f, "/", "format_version", 1); break;
+        case 1: poke(f, "/channels/tx", H5T_NATIVE_DOUBLE, 5, 2, &v); break;
+        case 2: {
+            hsize_t d[2] = {3, 3};
+            double zeros[9] = {0};
+            replace_dataset(f, "/channels/tx", H5T_NATIVE_DOUBLE, 2, d, zeros);
+            replace_dataset(f, "/channels/array", H5T_NATIVE_DOUBLE, 2, d, zeros);
+            break;
+        }
+        case 3: H5Ldelete(f, "/channels/array", H5P_DEFAULT); break;
+        }
+        H5Fclose(f);
+        CHECK_FAILS(sasnav_run_read(path, &back), SASNAV_ERR_FORMAT);
+        CHECK(strstr(sasnav_last_error(), cases[c].expect) != NULL,
+              "%s: message '%s' does not say '%s'", cases[c].name, sasnav_last_error(), cases[c].expect);
+        CHECK(back == NULL, "%s: run returned", cases[c].name);
+        check_no_open_objects(cases[c].name);
+    }
+    sasnav_run_free(run);
+}
+
 static void test_bad_run_files(void)
 {
     sasnav_run *run = NULL;
@@ -706,7 +828,7 @@ static void test_bad_run_files(void)
     CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
     path = fresh_run_file("version.h5", 0);
     f = open_rw(path);
-    set_attr_int(f, "/", "format_version", 2);
+    set_attr_int(f, "/", "format_version", 3);
     H5Fclose(f);
     CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
     path = fresh_run_file("vlen.h5", 0);
@@ -1037,6 +1159,7 @@ static void test_run_container(void)
 int main(void)
 {
     test_aiding();
+    test_channels();
     test_grid();
     test_run_container();
     test_run_round_trip();

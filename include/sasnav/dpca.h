@@ -108,6 +108,7 @@ typedef struct {
  * a right estimate from one slipped by a phase-centre spacing: its surge
  * is not observed at all, estimator.h), or SASNAV_VERDICT_NO_OVERLAP. `opts` may be NULL (defaults); `detail` may be NULL.
  * Returns SASNAV_OK, or SASNAV_ERR_ARG (bad run, ping indices or options, a
+ * run whose channels have transmitters of their own (channel_offset), a
  * non-uniform array, a nominal shift that is not a whole number of phase
  * centres within 1e-6, fewer than 2 overlapping phase centres, a range
  * window outside the samples), SASNAV_ERR_NOMEM, SASNAV_ERR_FFT,

@@ -251,6 +251,32 @@ int sasnav_pair_set_data_channels(sasnav_pair *pair, const sasnav_cfloat *data_p
                                   const sasnav_ping_pose *channels_p,
                                   const sasnav_ping_pose *channels_q);
 
+/* Pings p and q of `run` (data_p, data_q: their samples): set_data for a
+ * run of one transmitter and N receivers, set_data_channels with each
+ * ping's channels (its navigation and the run's channel_offset, in its
+ * PCA-centroid frame) for a run whose channels have offsets. What
+ * navigate and pair call. tx_yaw (n_pings, or NULL: none) turns each
+ * ping's transmitter pose by tx_yaw[p] before the offsets are applied,
+ * where the navigation gives the transmitter the array's heading: the
+ * vehicle's yaw between transmission and reception
+ * (sasnav_run_tx_yaw). A transmitter d metres from the ping's moves
+ * sideways by d x that yaw, and where the overlapping phase centres of
+ * two pings come from different transmitters the sway estimate moves
+ * with it (docs/model.md, "Channel layouts"). Errors: as those, p or q
+ * outside the run, a run whose channel count is not the estimator's. */
+int sasnav_pair_set_data_run(sasnav_pair *pair, const sasnav_run *run, int p, int q,
+                             const sasnav_cfloat *data_p, const sasnav_cfloat *data_q, sasnav_pose nominal,
+                             const double *tx_yaw);
+
+/* The transmitter's yaw at transmission relative to the array's at
+ * reception, per ping, from the run's gyro: -r x interval, r the mean
+ * measured yaw rate over the two ping intervals around the ping (entries
+ * without a measurement left out; 0 where none), interval the time from
+ * transmission to reception that the navigation's Tx-array offset stands
+ * for (tx_lag / speed; 2 R / c for a real ping at range R). Errors: no
+ * gyro in the run, interval < 0. */
+int sasnav_run_tx_yaw(const sasnav_run *run, double interval, double *tx_yaw);
+
 /* Evaluates zeta and eta at a hypothesised MOTION ERROR (displacement =
  * nominal + error). level 0: coarse pixels, coarse (k, i); level 1: full
  * pixels, coarse (k, i); level 2: full pixels, final (k, i). blurred != 0

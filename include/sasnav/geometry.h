@@ -79,6 +79,22 @@ sasnav_ping_pose sasnav_ping_local(const sasnav_ping_pose *ping);
  * world = centroid * local, for both tx and array. */
 sasnav_ping_pose sasnav_ping_place(sasnav_pose centroid, const sasnav_ping_pose *local);
 
+/* Channels with poses of their own (docs/model.md, "Channel layouts";
+ * stored in a run file as /channels, docs/format.md): offset[l] places
+ * channel l relative to its ping, out[l].tx = ping.tx * offset[l].tx (the
+ * channel's transmitter in the ping's transmitter frame) and out[l].array
+ * = ping.array * offset[l].array (the array frame in which receiver l sits
+ * at rx_u[l]). An offset of zeros is the one-Tx ping: a head with several
+ * transmitters, receivers off the array axis or rotated staves are the
+ * others. `out` has n entries (sasnav_op_set_channels' input). */
+void sasnav_channel_poses(const sasnav_ping_pose *ping, const sasnav_ping_pose *offset, int n,
+                          sasnav_ping_pose *out);
+
+/* Largest distance of a channel's transmitter or array origin from its
+ * ping's (the margin that reach tests add for offset channels); 0 for
+ * offset NULL. */
+double sasnav_channel_offset_radius(const sasnav_ping_pose *offset, int n);
+
 /* EPCA replacement geometry (paper eq. epcar/epcat, SPEC 3) in the centroid
  * frame: the array midpoint ahead of the transmitter by `tx_lag` metres along
  * the array axis (the distance the vehicle covers while the pulse travels to

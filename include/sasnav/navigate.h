@@ -290,6 +290,10 @@ struct sasnav_navigation {
                                      after the other) */
     void *packed;                 /* internal: the packed pairs
                                      (opts.compact_pairs), or NULL */
+    int gyro_tx_yaw;              /* 1: a run with channel offsets whose
+                                     layouts turned each transmitter by the
+                                     gyro's yaw between transmission and
+                                     reception (sasnav_run_tx_yaw) */
 };
 
 /* Pair j (0 <= j < n_pairs) of `nav`, whether its pairs are packed

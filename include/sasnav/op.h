@@ -109,6 +109,12 @@ int sasnav_op_set_geometry(sasnav_op *op, const sasnav_ping_pose *ping);
  * set_geometry, naming the channel. */
 int sasnav_op_set_channels(sasnav_op *op, const sasnav_ping_pose *channels);
 
+/* A ping of a run whose channels may be offset (sasnav_run.channel_offset,
+ * n_rx entries, or NULL): set_channels with the channels' poses
+ * (sasnav_channel_poses) when `offset` is not NULL, set_geometry (the same
+ * bits as before) when it is. */
+int sasnav_op_set_ping(sasnav_op *op, const sasnav_ping_pose *ping, const sasnav_ping_pose *offset);
+
 /* data[l * n_samples + m] = (T rho)_l(t_m). data has n_rx * n_samples entries,
  * rho has n_points entries. */
 int sasnav_op_forward(sasnav_op *op, const sasnav_cfloat *rho, sasnav_cfloat *data);

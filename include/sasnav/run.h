@@ -66,6 +66,14 @@ typedef struct {
     double range_of_interest;  /* centre range of the swath, m */
     sasnav_aiding *aiding;     /* aiding measurements, or NULL */
     sasnav_ping_source source; /* streamed runs (raw NULL); zero otherwise */
+    sasnav_ping_pose *channel_offset; /* n_rx: each channel's transmitter and
+                                 array pose relative to its ping's
+                                 (sasnav_channel_poses; a head with several
+                                 transmitters, receivers off the axis), or
+                                 NULL: one transmitter and N receivers on
+                                 the axis, the common case. The same for
+                                 every ping; file: /channels, format
+                                 version 2 */
 } sasnav_run;
 
 /* Allocates a run with zeroed raw data and zeroed navigation; truth is
@@ -89,6 +97,16 @@ int sasnav_run_alloc_aiding(sasnav_run *run, int with_yaw_rate, int with_velocit
 /* Checks an aiding record against n_pings: finite values, standard
  * deviations > 0 (or +inf), strictly increasing times. */
 int sasnav_aiding_check(const sasnav_aiding *aiding, int n_pings);
+
+/* Gives `run` per-channel offsets (n_rx entries, copied; NULL removes
+ * them). Errors: non-finite offsets, positions beyond the plausible size,
+ * NULL run. */
+int sasnav_run_set_channel_offset(sasnav_run *run, const sasnav_ping_pose *offset);
+
+/* Ping p's channel poses from `ping` (its navigation or truth) and the
+ * run's offsets: n_rx entries, each the ping's own poses when the run has
+ * no offsets. */
+void sasnav_run_channel_poses(const sasnav_run *run, const sasnav_ping_pose *ping, sasnav_ping_pose *out);
 
 /* Frees an aiding record (safe on NULL). */
 void sasnav_aiding_free(sasnav_aiding *aiding);

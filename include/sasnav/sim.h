@@ -105,6 +105,14 @@ typedef struct {
     uint64_t noise_seed;
     sasnav_aiding_params aiding;   /* aiding sensors (off unless enabled) */
     sasnav_grid image_grid;        /* default grid for imaging */
+    int n_channel_tx;              /* 0: one transmitter (the common case);
+                                      else array.n_rx: channel l transmits
+                                      from its own transmitter, at
+                                      channel_tx_u[l] along the ping's
+                                      transmitter axis (a head with several
+                                      transmitters; the run gets
+                                      channel_offset, file format 2) */
+    double channel_tx_u[SASNAV_MAX_RX]; /* m */
 } sasnav_scenario;
 
 /* Built-in presets: "paper-pair", "paper-trajectory", "point" (one point

@@ -3,7 +3,7 @@ function [s, t] = sasnav_h5_load(file, formats, groups)
 %
 %   [s, t] = sasnav_h5_load(file, formats, groups)
 %   Checks the root attributes `format` (one of the cell array `formats`)
-%   and `format_version` (1), then maps the file onto s:
+%   and `format_version` (1 or 2: run files with /channels), then maps the file onto s:
 %     * a group is a struct field (s.nav, s.system ...) holding its
 %       attributes (s.system.sound_speed) and its members;
 %     * a dataset is a field holding its values (sasnav_h5_data: the index
@@ -33,8 +33,8 @@ if ~any(strcmp(s.format, formats))
     error('sasnav:format', 'sasnav: %s: format is "%s", expected %s', file, s.format, ...
           strjoin(strcat('"', formats, '"'), ' or '));
 end
-if ~isfield(s, 'format_version') || ~isequal(s.format_version, 1)
-    error('sasnav:format', 'sasnav: %s: format_version must be 1', file);
+if ~isfield(s, 'format_version') || ~(isequal(s.format_version, 1) || isequal(s.format_version, 2))
+    error('sasnav:format', 'sasnav: %s: format_version must be 1 or 2', file);
 end
 s.attributes = struct();
 for k = 1:numel(t.datasets)

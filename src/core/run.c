@@ -236,6 +236,48 @@ static int poses_check(const sasnav_ping_pose *poses, int n, const char *what)
     return SASNAV_OK;
 }
 
+static int offset_check(const sasnav_ping_pose *offset, int n)
+{
+    for (int l = 0; l < n; l++) {
+        if (!pose_finite(offset[l].tx) || !pose_finite(offset[l].array))
+            return sasnav_set_error(SASNAV_ERR_ARG, "offset of channel %d is not finite", l);
+        double r = sasnav_channel_offset_radius(&offset[l], 1);
+        if (r > SASNAV_SIZE_MAX_M)
+            return sasnav_set_error(SASNAV_ERR_ARG,
+                                    "offset of channel %d: %g m from its ping (plausible: at most %g m)",
+                                    l, r, SASNAV_SIZE_MAX_M);
+    }
+    return SASNAV_OK;
+}
+
+int sasnav_run_set_channel_offset(sasnav_run *run, const sasnav_ping_pose *offset)
+{
+    if (!run) return sasnav_set_error(SASNAV_ERR_ARG, "channel offsets need a run");
+    sasnav_ping_pose *copy = NULL;
+    int n = run->array.n_rx;
+    if (offset) {
+        if (n < 1 || n > SASNAV_MAX_RX)
+            return sasnav_set_error(SASNAV_ERR_ARG, "channel offsets for %d channels", n);
+        int rc = offset_check(offset, n);
+        if (rc) return rc;
+        copy = malloc(sizeof *copy * (size_t)n);
+        if (!copy) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        memcpy(copy, offset, sizeof *copy * (size_t)n);
+    }
+    free(run->channel_offset);
+    run->channel_offset = copy;
+    return SASNAV_OK;
+}
+
+void sasnav_run_channel_poses(const sasnav_run *run, const sasnav_ping_pose *ping, sasnav_ping_pose *out)
+{
+    if (run->channel_offset) {
+        sasnav_channel_poses(ping, run->channel_offset, run->array.n_rx, out);
+        return;
+    }
+    for (int l = 0; l < run->array.n_rx; l++) out[l] = *ping;
+}
+
 static int run_check(const sasnav_run *run, int samples);
 
 int sasnav_run_check(const sasnav_run *run) { return run_check(run, 1); }
@@ -286,6 +328,10 @@ static int run_check(const sasnav_run *run, int samples)
     }
     rc = sasnav_aiding_check(run->aiding, run->n_pings);
     if (rc) return rc;
+    if (run->channel_offset) {
+        rc = offset_check(run->channel_offset, run->array.n_rx);
+        if (rc) return rc;
+    }
     const float *v = (const float *)run->raw; /* C11 6.2.5: complex = float[2] */
     for (size_t k = 0; samples && v && k < 2 * n; k++)
         if (!isfinite(v[k])) {
@@ -306,6 +352,7 @@ void sasnav_run_free(sasnav_run *run)
     free(run->nav);
     free(run->truth);
     sasnav_aiding_free(run->aiding);
+    free(run->channel_offset);
     free(run);
 }
 
@@ -363,6 +410,15 @@ int sasnav_run_subset(const sasnav_run *run, const int *pings, int n_pings, cons
     r->speed = run->speed;
     r->tx_lag = run->tx_lag;
     r->range_of_interest = run->range_of_interest;
+    if (run->channel_offset) {
+        sasnav_ping_pose off[SASNAV_MAX_RX];
+        for (int l = 0; l < nc; l++) off[l] = run->channel_offset[channels ? channels[l] : l];
+        rc = sasnav_run_set_channel_offset(r, off);
+        if (rc) {
+            sasnav_run_free(r);
+            return rc;
+        }
+    }
     int consecutive = run->aiding != NULL;
     for (int i = 1; i < n_pings && consecutive; i++) consecutive = pings[i] == pings[i - 1] + 1;
     if (consecutive) {

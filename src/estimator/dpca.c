@@ -274,6 +274,10 @@ static int check_inputs(const sasnav_run *run, int p, int q, const sasnav_dpca_o
                                 q, run->n_pings - 1);
     if (!(run->ping_spacing > 0))
         return sasnav_set_error(SASNAV_ERR_ARG, "DPCA: the run's nominal ping spacing must be > 0");
+    if (run->channel_offset)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "DPCA: the run's channels have transmitters of their own (channel offsets); "
+                                "this DPCA pairs receivers of one transmitter: use the subspace estimator");
     return opts_check(o);
 }
 

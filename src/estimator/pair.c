@@ -449,6 +449,59 @@ int sasnav_pair_set_data_channels(sasnav_pair *pr, const sasnav_cfloat *data_p,
     return make_levels(pr);
 }
 
+/* Ping p's channels in its PCA-centroid frame (navigation and offsets;
+ * the transmitter turned by tx_yaw[p] where its heading is the array's). */
+static void run_layout(const sasnav_run *run, int p, const double *tx_yaw, sasnav_ping_pose *local)
+{
+    sasnav_ping_pose ping = run->nav[p];
+    if (tx_yaw && ping.tx.theta == ping.array.theta) ping.tx.theta += tx_yaw[p];
+    sasnav_run_channel_poses(run, &ping, local);
+    sasnav_pose c = sasnav_ping_centroid(&run->nav[p]);
+    for (int l = 0; l < run->array.n_rx; l++) {
+        local[l].tx = sasnav_pose_between(c, local[l].tx);
+        local[l].array = sasnav_pose_between(c, local[l].array);
+    }
+}
+
+int sasnav_run_tx_yaw(const sasnav_run *run, double interval, double *tx_yaw)
+{
+    if (!run || !tx_yaw) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    if (!run->aiding || !run->aiding->yaw_rate)
+        return sasnav_set_error(SASNAV_ERR_ARG, "transmitter yaw: the run has no gyro measurements");
+    if (!(interval >= 0) || !isfinite(interval))
+        return sasnav_set_error(SASNAV_ERR_ARG, "transmitter yaw: interval %g s must be >= 0", interval);
+    const sasnav_aiding *a = run->aiding;
+    double t2 = interval;
+    for (int p = 0; p < run->n_pings; p++) {
+        double sum = 0;
+        int w = 0;
+        for (int j = p; j <= p + 1; j++) /* the intervals ending at p and at p + 1 */
+            if (j >= 1 && j < run->n_pings && isfinite(a->yaw_rate_sigma[j])) {
+                sum += a->yaw_rate[j];
+                w++;
+            }
+        tx_yaw[p] = w ? -t2 * sum / w : 0.0;
+    }
+    return SASNAV_OK;
+}
+
+int sasnav_pair_set_data_run(sasnav_pair *pr, const sasnav_run *run, int p, int q,
+                             const sasnav_cfloat *data_p, const sasnav_cfloat *data_q, sasnav_pose nominal,
+                             const double *tx_yaw)
+{
+    if (!pr || !run) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    if (!run->channel_offset) return sasnav_pair_set_data(pr, data_p, data_q, nominal);
+    if (p < 0 || q < 0 || p >= run->n_pings || q >= run->n_pings)
+        return sasnav_set_error(SASNAV_ERR_ARG, "pair (%d, %d) outside the run's %d pings", p, q, run->n_pings);
+    if (run->array.n_rx != pr->array.n_rx)
+        return sasnav_set_error(SASNAV_ERR_ARG, "the run has %d channels, the estimator %d", run->array.n_rx,
+                                pr->array.n_rx);
+    sasnav_ping_pose lp[SASNAV_MAX_RX], lq[SASNAV_MAX_RX];
+    run_layout(run, p, tx_yaw, lp);
+    run_layout(run, q, tx_yaw, lq);
+    return sasnav_pair_set_data_channels(pr, data_p, data_q, nominal, lp, lq);
+}
+
 /* Places q's operator at the hypothesised motion error (skipped when it is
  * already there). */
 static int place_q(sasnav_pair *pr, int level, sasnav_pose error)
@@ -842,7 +895,9 @@ int sasnav_pair_estimate_intervals(const sasnav_run *run, int p, int q,
         out[s].tx_lag = so.tx_lag;
         sasnav_pair *pair = NULL;
         rc = sasnav_pair_create(&run->sys, &run->array, &run->win, &so, &pair);
-        if (!rc) rc = sasnav_pair_set_data(pair, sasnav_run_ping(run, p), sasnav_run_ping(run, q), nominal);
+        if (!rc)
+            rc = sasnav_pair_set_data_run(pair, run, p, q, sasnav_run_ping(run, p), sasnav_run_ping(run, q),
+                                          nominal, NULL);
         if (!rc) rc = sasnav_pair_estimate(pair, &out[s].result);
         sasnav_pair_destroy(pair);
         out[s].status = rc;

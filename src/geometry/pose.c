@@ -74,3 +74,22 @@ double sasnav_motion_tx_lag(double speed, double range, double sound_speed)
 {
     return speed * 2.0 * range / sound_speed;
 }
+
+void sasnav_channel_poses(const sasnav_ping_pose *ping, const sasnav_ping_pose *offset, int n,
+                          sasnav_ping_pose *out)
+{
+    for (int l = 0; l < n; l++) {
+        out[l].tx = sasnav_pose_compose(ping->tx, offset[l].tx);
+        out[l].array = sasnav_pose_compose(ping->array, offset[l].array);
+    }
+}
+
+double sasnav_channel_offset_radius(const sasnav_ping_pose *offset, int n)
+{
+    double r = 0;
+    for (int l = 0; offset && l < n; l++) {
+        r = fmax(r, hypot(offset[l].tx.x, offset[l].tx.y));
+        r = fmax(r, hypot(offset[l].array.x, offset[l].array.y));
+    }
+    return r;
+}

@@ -48,6 +48,7 @@ int sasnav_bp_ping_reaches(const sasnav_run *run, const sasnav_ping_pose *pose, 
     double radius = hypot(pose->tx.x - cx, pose->tx.y - cy);
     for (int l = 0; l < run->array.n_rx; l++)
         if (fabs(run->array.rx_u[l]) > radius) radius = fabs(run->array.rx_u[l]);
+    radius += sasnav_channel_offset_radius(run->channel_offset, run->array.n_rx);
     double dx = cx < xa ? xa - cx : cx > xb ? cx - xb : 0.0;
     double dy = cy < ya ? ya - cy : cy > yb ? cy - yb : 0.0;
     double d = hypot(dx, dy) - radius;
@@ -94,7 +95,7 @@ static int backproject_one(const sasnav_run *run, const sasnav_ping_pose *nav,
         if (sasnav_bp_ping_reaches(run, &nav[p], xa, xb, ya, yb, t_last)) {
             const sasnav_cfloat *ping = NULL;
             rc = sasnav_run_get_ping(run, p, ping_buf, &ping);
-            if (!rc) rc = sasnav_op_set_geometry(op, &nav[p]);
+            if (!rc) rc = sasnav_op_set_ping(op, &nav[p], run->channel_offset);
             if (!rc) rc = sasnav_op_adjoint_add(op, ping, tile);
         }
         ++*step;

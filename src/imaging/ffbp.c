@@ -206,6 +206,11 @@ static void item_sensors(const ffbp_ctx *cx, int i, double *tx, double *ty, doub
 {
     const sasnav_ping_pose *p = &cx->nav[cx->pings[i / cx->nrx]];
     double u = cx->run->array.rx_u[i % cx->nrx];
+    sasnav_ping_pose ch;
+    if (cx->run->channel_offset) { /* the channel's own poses */
+        sasnav_channel_poses(p, &cx->run->channel_offset[i % cx->nrx], 1, &ch);
+        p = &ch;
+    }
     *tx = p->tx.x;
     *ty = p->tx.y;
     *rx = p->array.x + u * cos(p->array.theta);
@@ -422,7 +427,9 @@ static int fill_polar(ffbp_ctx *cx, int a, int b, const polar *g, sasnav_cfloat 
         free(x);
         free(y);
         if (!rc) rc = item_ping(cx, a, &ping);
-        if (!rc) rc = sasnav_op_set_geometry(*op, &cx->nav[cx->pings[a / cx->nrx]]);
+        if (!rc)
+            rc = sasnav_op_set_ping(*op, &cx->nav[cx->pings[a / cx->nrx]],
+                                    cx->run->channel_offset ? cx->run->channel_offset + l0 : NULL);
         if (!rc) rc = sasnav_op_adjoint(*op, ping + (size_t)l0 * (size_t)cx->run->win.n_samples, v);
         if (rc) {
             free(v);
@@ -505,7 +512,7 @@ static int direct(ffbp_ctx *cx, int a, int b)
             memcpy(cx->scratch + (size_t)l0 * ns, ping + (size_t)l0 * ns, sizeof *ping * ns * (size_t)(l1 - l0));
             ping = cx->scratch;
         }
-        if (!rc) rc = sasnav_op_set_geometry(cx->tile_op, &cx->nav[cx->pings[pi]]);
+        if (!rc) rc = sasnav_op_set_ping(cx->tile_op, &cx->nav[cx->pings[pi]], cx->run->channel_offset);
         if (!rc) rc = sasnav_op_adjoint_add(cx->tile_op, ping, cx->tile);
         if (!rc && l1 == cx->nrx) step_done(cx);
         i = pi * cx->nrx + l1;

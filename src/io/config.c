@@ -45,6 +45,7 @@ typedef enum {
     V_SCENE_KIND, /* sasnav_scene_kind */
     V_SNR,        /* double, finite or +inf */
     V_POSITIONS,  /* array.rx_positions: sequence of reals */
+    V_TX_POSITIONS, /* array.tx_positions: sequence of reals, one per channel */
     V_TARGETS,    /* scene.targets: sequence of [x, y, amp] */
     V_PAIR        /* trajectory.pair_error: mapping or none */
 } value_kind;
@@ -111,6 +112,8 @@ static const key_spec config_keys[] = {
     {"array", "rx_spacing", V_REAL, AR(rx_spacing), R_NONNEG, 0, 0, "m, uniform receiver spacing"},
     {"array", "rx_positions", V_POSITIONS, AR(positions), R_ANY, 0, 0,
      "m, explicit receiver positions (non-uniform arrays)"},
+    {"array", "tx_positions", V_TX_POSITIONS, SC(channel_tx_u), R_ANY, 0, 0,
+     "m, per-channel transmitters along the Tx axis ([] = one Tx)"},
     {"array", "rx_length", V_REAL, AR(rx_length), R_NONNEG, 0, 0,
      "m, receiver aperture (0 = omni)"},
     {"array", "tx_length", V_REAL, AR(tx_length), R_NONNEG, 0, 0,
@@ -492,6 +495,26 @@ static int read_positions(loader *L, struct fy_node *node, int line)
     return SASNAV_OK;
 }
 
+static int read_tx_positions(loader *L, struct fy_node *node, int line)
+{
+    if (!node || !fy_node_is_sequence(node))
+        return fail(L, line, "expected a sequence of transmitter positions [u0, u1, ...] in metres, one per channel");
+    int n = fy_node_sequence_item_count(node);
+    if (n > SASNAV_MAX_RX) return fail(L, line, "needs 0..%d positions, got %d", SASNAV_MAX_RX, n);
+    void *iter = NULL;
+    struct fy_node *item;
+    int i = 0;
+    while ((item = fy_node_sequence_iterate(node, &iter))) {
+        char suffix[24];
+        snprintf(suffix, sizeof suffix, "[%d]", i);
+        int rc = read_real_item(L, item, line, suffix, &L->sc.channel_tx_u[i]);
+        if (rc) return rc;
+        i++;
+    }
+    L->sc.n_channel_tx = n;
+    return SASNAV_OK;
+}
+
 static int read_targets(loader *L, struct fy_node *node, int line)
 {
     if (!node || !fy_node_is_sequence(node))
@@ -583,6 +606,7 @@ static int read_value(loader *L, const key_spec *k, struct fy_node *value, int l
         if (!rc) *(sasnav_scene_kind *)field = (sasnav_scene_kind)choice;
         return rc;
     case V_POSITIONS: return read_positions(L, value, line);
+    case V_TX_POSITIONS: return read_tx_positions(L, value, line);
     case V_TARGETS: return read_targets(L, value, line);
     case V_PAIR: return read_pair(L, value, line);
     }
@@ -1041,6 +1065,14 @@ static void write_key(FILE *f, const writer *w, const key_spec *k, int indent)
         fprintf(f, "%*s%s: [", indent, "", k->name);
         for (int l = 0; l < sc->array.n_rx; l++) {
             format_real(sc->array.rx_u[l], value, sizeof value);
+            fprintf(f, "%s%s", l ? ", " : "", value);
+        }
+        fprintf(f, "]  # %s\n", k->comment);
+        return;
+    case V_TX_POSITIONS:
+        fprintf(f, "%*s%s: [", indent, "", k->name);
+        for (int l = 0; l < sc->n_channel_tx; l++) {
+            format_real(sc->channel_tx_u[l], value, sizeof value);
             fprintf(f, "%s%s", l ? ", " : "", value);
         }
         fprintf(f, "]  # %s\n", k->comment);

@@ -93,7 +93,8 @@ static int poses_read(h5_ctx *c, const char *group, int n, sasnav_ping_pose *pos
         for (int p = 0; p < n && !rc; p++) {
             sasnav_pose q = {buf[3 * p], buf[3 * p + 1], buf[3 * p + 2]};
             if (!isfinite(q.x) || !isfinite(q.y) || !isfinite(q.theta))
-                rc = h5_fail(c, SASNAV_ERR_FORMAT, "%s: pose of ping %d is not finite", name, p);
+                rc = h5_fail(c, SASNAV_ERR_FORMAT, "%s: pose of %s %d is not finite", name,
+                             strcmp(group, "/channels") ? "ping" : "channel", p);
             else if (which == 0)
                 poses[p].tx = q;
             else
@@ -189,6 +190,25 @@ static int aiding_read(h5_ctx *c, sasnav_run *run)
     return rc;
 }
 
+/* Reads /channels (format version 2; absent: none) into run->channel_offset. */
+static int channels_read(h5_ctx *c, sasnav_run *run)
+{
+    if (!h5_exists(c, "/channels")) return SASNAV_OK;
+    if (c->version < 2)
+        return h5_fail(c, SASNAV_ERR_FORMAT, "/channels needs format_version 2 (the file says %d)", c->version);
+    int n = 0;
+    int rc = poses_count(c, "/channels", &n);
+    if (!rc && n != run->array.n_rx)
+        rc = h5_fail(c, SASNAV_ERR_FORMAT, "/channels/tx has %d channels, /raw has %d", n, run->array.n_rx);
+    sasnav_ping_pose off[SASNAV_MAX_RX];
+    if (!rc) rc = poses_read(c, "/channels", n, off);
+    if (!rc) {
+        rc = sasnav_run_set_channel_offset(run, off);
+        if (rc) rc = h5_reframe(c, rc, "/channels");
+    }
+    return rc;
+}
+
 int sasnav_run_write(const char *path, const sasnav_run *run)
 {
     if (!path) return sasnav_set_error(SASNAV_ERR_ARG, "run file path is NULL");
@@ -196,7 +216,7 @@ int sasnav_run_write(const char *path, const sasnav_run *run)
     if (rc) return rc;
     h5_ctx c;
     h5_begin(&c, path);
-    rc = h5_create_tmp(&c, "sasnav-run");
+    rc = h5_create_tmp_version(&c, "sasnav-run", run->channel_offset ? 2 : 1);
     hsize_t dims[3] = {(hsize_t)run->n_pings, (hsize_t)run->array.n_rx, (hsize_t)run->win.n_samples};
     hsize_t ping_chunk[3] = {1, dims[1], dims[2]};
     if (!rc) rc = h5_write_dataset(&c, "/raw", H5_COMPLEX, 3, dims, ping_chunk, run->raw, "1");
@@ -205,6 +225,7 @@ int sasnav_run_write(const char *path, const sasnav_run *run)
     if (!rc) rc = poses_write(&c, "/nav", run->n_pings, run->nav);
     if (!rc && run->truth) rc = poses_write(&c, "/truth", run->n_pings, run->truth);
     if (!rc && run->aiding) rc = aiding_write(&c, run->n_pings, run->aiding);
+    if (!rc && run->channel_offset) rc = poses_write(&c, "/channels", run->array.n_rx, run->channel_offset);
     if (!rc) rc = h5_commit(&c);
     h5_end(&c);
     return rc;
@@ -226,6 +247,7 @@ struct sasnav_run_writer {
     hid_t raw;
     sasnav_run header; /* shapes only (sys, array, win, n_pings) */
     size_t per_ping;
+    int version;       /* 2 when the header had channel offsets */
 };
 
 int sasnav_run_writer_open(const char *path, const sasnav_run *header, sasnav_run_writer **out)
@@ -251,10 +273,12 @@ int sasnav_run_writer_open(const char *path, const sasnav_run *header, sasnav_ru
     w->header.raw = NULL;
     w->header.nav = w->header.truth = NULL;
     w->header.aiding = NULL;
+    w->version = header->channel_offset ? 2 : 1;
+    w->header.channel_offset = NULL;
     memset(&w->header.source, 0, sizeof w->header.source);
     w->per_ping = (size_t)header->array.n_rx * (size_t)header->win.n_samples;
     h5_begin(&w->c, w->path);
-    rc = h5_create_tmp(&w->c, "sasnav-run");
+    rc = h5_create_tmp_version(&w->c, "sasnav-run", w->version);
     hsize_t dims[3] = {(hsize_t)header->n_pings, (hsize_t)header->array.n_rx,
                        (hsize_t)header->win.n_samples};
     hsize_t chunk[3] = {1, dims[1], dims[2]};
@@ -295,6 +319,9 @@ int sasnav_run_writer_finish(sasnav_run_writer *w, const sasnav_run *run)
     if (!rc && (run->n_pings != w->header.n_pings || run->array.n_rx != w->header.array.n_rx ||
                 run->win.n_samples != w->header.win.n_samples))
         rc = sasnav_set_error(SASNAV_ERR_ARG, "run writer: the run's shape differs from the one opened");
+    if (!rc && (run->channel_offset != NULL) != (w->version == 2))
+        rc = sasnav_set_error(SASNAV_ERR_ARG, "run writer: channel offsets must be given when the writer is "
+                                              "opened (they set the format version)");
     if (!rc) rc = sasnav_run_check_header(run);
     if (!rc) {
         H5Dclose(w->raw);
@@ -305,6 +332,8 @@ int sasnav_run_writer_finish(sasnav_run_writer *w, const sasnav_run *run)
     if (!rc) rc = poses_write(&w->c, "/nav", run->n_pings, run->nav);
     if (!rc && run->truth) rc = poses_write(&w->c, "/truth", run->n_pings, run->truth);
     if (!rc && run->aiding) rc = aiding_write(&w->c, run->n_pings, run->aiding);
+    if (!rc && run->channel_offset)
+        rc = poses_write(&w->c, "/channels", run->array.n_rx, run->channel_offset);
     if (!rc) rc = h5_commit(&w->c);
     sasnav_run_writer_abort(w); /* frees; after a commit nothing is left to remove */
     return rc;
@@ -575,6 +604,7 @@ static int run_read_open(h5_ctx *c, int streamed, sasnav_run **out)
     if (!rc) rc = poses_read(c, "/nav", run->n_pings, run->nav);
     if (!rc && with_truth) rc = poses_read(c, "/truth", run->n_pings, run->truth);
     if (!rc) rc = aiding_read(c, run);
+    if (!rc) rc = channels_read(c, run);
     if (!rc) {
         run->ping_spacing = h.ping_spacing;
         run->speed = h.speed;

@@ -245,9 +245,10 @@ int h5_open_read(h5_ctx *c, const char *const *formats, int n_formats)
     int version;
     rc = h5_read_attr_int(c, "/", "format_version", &version);
     if (rc) return rc;
-    if (version != SASNAV_H5_FORMAT_VERSION)
-        return h5_fail(c, SASNAV_ERR_FORMAT, "format_version %d is not supported (this library reads %d)",
-                       version, SASNAV_H5_FORMAT_VERSION);
+    if (version < 1 || version > SASNAV_H5_FORMAT_VERSION_MAX)
+        return h5_fail(c, SASNAV_ERR_FORMAT, "format_version %d is not supported (this library reads 1 to %d)",
+                       version, SASNAV_H5_FORMAT_VERSION_MAX);
+    c->version = version;
     return SASNAV_OK;
 }
 
@@ -631,6 +632,11 @@ static int tmp_create(h5_ctx *c)
 
 int h5_create_tmp(h5_ctx *c, const char *format)
 {
+    return h5_create_tmp_version(c, format, SASNAV_H5_FORMAT_VERSION);
+}
+
+int h5_create_tmp_version(h5_ctx *c, const char *format, int version)
+{
     int rc = tmp_create(c);
     if (rc) return rc;
     hid_t fapl = file_access_plist(1);
@@ -640,7 +646,7 @@ int h5_create_tmp(h5_ctx *c, const char *format)
     H5Pclose(fapl);
     if (rc) return rc;
     rc = h5_write_attr_string(c, "/", "format", format);
-    if (!rc) rc = h5_write_attr_int(c, "/", "format_version", SASNAV_H5_FORMAT_VERSION);
+    if (!rc) rc = h5_write_attr_int(c, "/", "format_version", version);
     if (!rc) rc = h5_write_attr_string(c, "/", "created_by", SASNAV_H5_CREATED_BY);
     return rc;
 }

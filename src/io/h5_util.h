@@ -12,7 +12,8 @@
 
 /* Written to the root attribute `created_by`. */
 #define SASNAV_H5_CREATED_BY "sasnav 0.1.0"
-#define SASNAV_H5_FORMAT_VERSION 1
+#define SASNAV_H5_FORMAT_VERSION 1     /* written unless a run needs more */
+#define SASNAV_H5_FORMAT_VERSION_MAX 2 /* read: 1 .. this (2: run files with /channels) */
 
 /* Whole-file state of one read or write call. */
 typedef struct {
@@ -22,6 +23,7 @@ typedef struct {
     hid_t file;         /* open file or H5I_INVALID_HID */
     H5E_auto2_t saved_func; /* HDF5 automatic error printing, restored at the end */
     void *saved_data;
+    int version;        /* readers: the file's format_version */
 } h5_ctx;
 
 /* Silences HDF5's error printing for the duration of the call. */
@@ -92,6 +94,8 @@ int h5_read_dataset_dims(h5_ctx *c, const char *name, int kind, int rank, const 
 /* Creates "<path>.tmp-XXXXXX" next to path and opens it as a new HDF5 file,
  * writing the root attributes (format, format_version, created_by). */
 int h5_create_tmp(h5_ctx *c, const char *format);
+/* The same with a given format_version (1 .. SASNAV_H5_FORMAT_VERSION_MAX). */
+int h5_create_tmp_version(h5_ctx *c, const char *format, int version);
 /* Closes the file, flushes it to disk and renames it onto c->path. */
 int h5_commit(h5_ctx *c);
 

@@ -952,6 +952,15 @@ int sasnav_op_set_channels(sasnav_op *op, const sasnav_ping_pose *channels)
     return apply_geometry(op, channels, 1);
 }
 
+int sasnav_op_set_ping(sasnav_op *op, const sasnav_ping_pose *ping, const sasnav_ping_pose *offset)
+{
+    if (!op || !ping) return sasnav_set_error(SASNAV_ERR_ARG, "op: set_ping with NULL argument");
+    if (!offset) return apply_geometry(op, ping, 0);
+    sasnav_ping_pose ch[SASNAV_MAX_RX];
+    sasnav_channel_poses(ping, offset, op->n_rx, ch);
+    return apply_geometry(op, ch, 1);
+}
+
 /* ------------------------------------------------------------------------ */
 /* Forward and adjoint. */
 

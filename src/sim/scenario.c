@@ -188,6 +188,14 @@ int sasnav_scenario_check(const sasnav_scenario *sc)
     if (rc) return rc;
     rc = sasnav_array_check(&sc->array);
     if (rc) return rc;
+    if (sc->n_channel_tx != 0 && sc->n_channel_tx != sc->array.n_rx)
+        return sasnav_set_error(SASNAV_ERR_ARG, "%d channel transmitter positions for %d channels",
+                                sc->n_channel_tx, sc->array.n_rx);
+    for (int l = 0; l < sc->n_channel_tx; l++)
+        if (!isfinite(sc->channel_tx_u[l]) || fabs(sc->channel_tx_u[l]) > SASNAV_SIZE_MAX_M)
+            return sasnav_set_error(SASNAV_ERR_ARG,
+                                    "channel %d's transmitter position %g m is not finite or beyond +-%g m", l,
+                                    sc->channel_tx_u[l], SASNAV_SIZE_MAX_M);
     if (!isfinite(sc->range_min) || !isfinite(sc->range_max) || !(sc->range_min > 0) ||
         !(sc->range_max > sc->range_min))
         return sasnav_set_error(SASNAV_ERR_GEOMETRY,

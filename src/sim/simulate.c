@@ -89,12 +89,13 @@ static int lower_bound(const sorted_scene *s, double v)
 
 /* Radius of the disc around the array's reference point that holds every
  * sensor of the ping. */
-static double sensor_radius(const sasnav_array *a, const sasnav_ping_pose *pose)
+static double sensor_radius(const sasnav_run *run, const sasnav_ping_pose *pose)
 {
+    const sasnav_array *a = &run->array;
     double r = hypot(pose->tx.x - pose->array.x, pose->tx.y - pose->array.y);
     for (int l = 0; l < a->n_rx; l++)
         if (fabs(a->rx_u[l]) > r) r = fabs(a->rx_u[l]);
-    return r;
+    return r + sasnav_channel_offset_radius(run->channel_offset, a->n_rx);
 }
 
 typedef int (*put_fn)(void *ctx, int p, const sasnav_cfloat *samples);
@@ -138,7 +139,7 @@ int sasnav_simulator_create(const sasnav_run *header, const sasnav_scene *scene,
         if (scene->x[i] < xmin) xmin = scene->x[i];
         if (scene->x[i] > xmax) xmax = scene->x[i];
     }
-    sim->select = xmax - xmin > SELECT_FACTOR * 2.0 * (sim->reach + sensor_radius(&run->array, &run->truth[0]));
+    sim->select = xmax - xmin > SELECT_FACTOR * 2.0 * (sim->reach + sensor_radius(run, &run->truth[0]));
     if (sim->select) {
         sasnav_op_destroy(sim->op);
         sim->op = NULL;
@@ -159,10 +160,10 @@ int sasnav_simulator_ping(sasnav_simulator *sim, int p, sasnav_cfloat *out)
     const sasnav_run *run = sim->run;
     const sasnav_ping_pose *pose = &run->truth[p];
     if (!sim->select) {
-        int rc = sasnav_op_set_geometry(sim->op, pose);
+        int rc = sasnav_op_set_ping(sim->op, pose, run->channel_offset);
         return rc ? rc : sasnav_op_forward(sim->op, sim->scene->amp, out);
     }
-    double band = sim->reach + sensor_radius(&run->array, pose) + 1e-6;
+    double band = sim->reach + sensor_radius(run, pose) + 1e-6;
     int k0 = lower_bound(&sim->sorted, pose->array.x - band);
     int k1 = lower_bound(&sim->sorted, pose->array.x + band);
     if (k1 <= k0) {
@@ -172,7 +173,7 @@ int sasnav_simulator_ping(sasnav_simulator *sim, int p, sasnav_cfloat *out)
     sasnav_op *op = NULL;
     int rc = sasnav_op_create(&run->sys, &run->array, &run->win, k1 - k0, sim->sorted.x + k0, sim->sorted.y + k0,
                               &sim->opts, &op);
-    if (!rc) rc = sasnav_op_set_geometry(op, pose);
+    if (!rc) rc = sasnav_op_set_ping(op, pose, run->channel_offset);
     if (!rc) rc = sasnav_op_forward(op, sim->sorted.amp + k0, out);
     sasnav_op_destroy(op);
     return rc;
@@ -339,6 +340,16 @@ static int scenario_header(const sasnav_scenario *sc, int with_raw, sasnav_run *
         }
     }
     if (rc) return rc;
+    if (sc->n_channel_tx) {
+        sasnav_ping_pose off[SASNAV_MAX_RX];
+        memset(off, 0, sizeof off);
+        for (int l = 0; l < sc->n_channel_tx; l++) off[l].tx.x = sc->channel_tx_u[l];
+        rc = sasnav_run_set_channel_offset(run, off);
+        if (rc) {
+            sasnav_run_free(run);
+            return rc;
+        }
+    }
     run->ping_spacing = sc->traj.ping_spacing;
     run->speed = sc->traj.speed;
     run->tx_lag = sc->traj.tx_lag;

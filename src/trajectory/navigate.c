@@ -110,6 +110,9 @@ typedef struct {
     double pc_spacing;        /* m, the array's phase-centre spacing */
     double *lags;             /* per-ping EPCA Tx-array offsets (m), or NULL:
                                  run->tx_lag for every ping */
+    double *tx_yaw;           /* runs with channel offsets and a gyro: each
+                                 ping's transmitter yaw relative to its
+                                 array (sasnav_run_tx_yaw), or NULL */
     const sasnav_pair_record **done; /* opts->done sorted by key (NULL: none) */
     int n_done;
     uint64_t digest;          /* options_digest: the seed of every pair key */
@@ -143,8 +146,9 @@ static int set_pair_data(const nav_ctx *ctx, int t, sasnav_pair *est, int p, int
     const sasnav_cfloat *dp, *dq;
     int rc = load_pair(ctx, t, p, q, &dp, &dq);
     if (rc) return rc;
-    return ctx->lags ? sasnav_pair_set_data_lags(est, dp, dq, nominal, ctx->lags[p], ctx->lags[q])
-                     : sasnav_pair_set_data(est, dp, dq, nominal);
+    return ctx->lags && !ctx->run->channel_offset
+               ? sasnav_pair_set_data_lags(est, dp, dq, nominal, ctx->lags[p], ctx->lags[q])
+               : sasnav_pair_set_data_run(est, ctx->run, p, q, dp, dq, nominal, ctx->tx_yaw);
 }
 
 static uint64_t hash_ints(uint64_t h, const int *v, int n)
@@ -218,7 +222,9 @@ static uint64_t pair_key(const nav_ctx *ctx, int p, int q, const sasnav_cfloat *
         h = sasnav_hash_words(h, data[k], n * sizeof(sasnav_cfloat));
         h = sasnav_hash_ping_poses(h, &run->nav[i], 1);
         h = sasnav_hash_double(h, ctx->lags ? ctx->lags[i] : run->tx_lag);
+        if (ctx->tx_yaw) h = sasnav_hash_double(h, ctx->tx_yaw[i]);
     }
+    if (run->channel_offset) h = sasnav_hash_ping_poses(h, run->channel_offset, run->array.n_rx);
     return h ? h : 1; /* 0 means "no key" in the progress report */
 }
 
@@ -318,8 +324,9 @@ static int estimate_pair(nav_ctx *ctx, int t, int j, int p, int q, sasnav_naviga
         }
     } else {
         double t0 = sasnav_now_seconds();
-        rc = ctx->lags ? sasnav_pair_set_data_lags(estimator, dp, dq, np->nominal, ctx->lags[p], ctx->lags[q])
-                       : sasnav_pair_set_data(estimator, dp, dq, np->nominal);
+        rc = ctx->lags && !run->channel_offset
+                 ? sasnav_pair_set_data_lags(estimator, dp, dq, np->nominal, ctx->lags[p], ctx->lags[q])
+                 : sasnav_pair_set_data_run(estimator, run, p, q, dp, dq, np->nominal, ctx->tx_yaw);
         if (!rc) rc = sasnav_pair_estimate(estimator, &np->result);
         if (rc) np->result.seconds = sasnav_now_seconds() - t0;
     }
@@ -363,6 +370,10 @@ static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
     if (o->method != SASNAV_METHOD_SUBSPACE && o->method != SASNAV_METHOD_DPCA &&
         o->method != SASNAV_METHOD_AIDING)
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: unknown method %d", (int)o->method);
+    if (o->method == SASNAV_METHOD_DPCA && run->channel_offset)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "navigate: DPCA pairs the receivers of one transmitter; this run's channels "
+                                "have transmitters of their own (use the subspace method)");
     if (o->method == SASNAV_METHOD_AIDING && (!run->aiding || !o->use_aiding || !o->resolve))
         return sasnav_set_error(SASNAV_ERR_ARG,
                                 "navigate: navigation by aiding alone needs a run with aiding "
@@ -1021,6 +1032,19 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
         if (!ctx->lags) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
         speed_lags(ctx, 1, ctx->lags);
     }
+    if (run->channel_offset && run->aiding && run->aiding->yaw_rate && o->use_aiding &&
+        o->method == SASNAV_METHOD_SUBSPACE) {
+        ctx->tx_yaw = malloc(sizeof(double) * (size_t)n);
+        if (!ctx->tx_yaw) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        /* The time the navigation's Tx-array offset stands for (the
+         * vehicle's travel between transmission and reception). */
+        double range = o->pair.range > 0 ? o->pair.range : run->range_of_interest;
+        double interval = run->speed > 0 && run->tx_lag > 0 ? run->tx_lag / run->speed
+                                                            : 2.0 * range / run->sys.sound_speed;
+        int r = sasnav_run_tx_yaw(run, interval, ctx->tx_yaw);
+        if (r) return r;
+    }
+    out->gyro_tx_yaw = ctx->tx_yaw != NULL;
     int rc = estimate_all(ctx, out);
     if (rc || ctx->n_parts > 1 || ctx->keys) return rc; /* a part: first estimates only */
     if (o->speed_lags == 2 && o->method == SASNAV_METHOD_SUBSPACE && !ctx->lags && !o->reuse) {
@@ -1087,7 +1111,7 @@ static int navigate_run(const sasnav_run *run, const sasnav_navigate_opts *opts,
     if (rc) return rc;
     nav_ctx ctx = {run, opts, NULL, 1, sasnav_now_seconds(),
                    run->array.n_rx > 1 ? 0.5 * fabs(run->array.rx_u[1] - run->array.rx_u[0]) : 0.025,
-                   NULL, NULL, 0, options_digest(run, opts), part, n_parts, NULL, NULL, {0, NULL, NULL}};
+                   NULL, NULL, NULL, 0, options_digest(run, opts), part, n_parts, NULL, NULL, {0, NULL, NULL}};
     if (keys) {
         ctx.keys = calloc((size_t)(2 * run->n_pings), sizeof *ctx.keys);
         if (!ctx.keys) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
@@ -1139,6 +1163,7 @@ static int navigate_run(const sasnav_run *run, const sasnav_navigate_opts *opts,
         for (int t = 0; t < ctx.n_workers; t++) sasnav_pair_destroy(ctx.estimators[t]);
     free(ctx.estimators);
     free(ctx.lags);
+    free(ctx.tx_yaw);
     out->seconds = sasnav_now_seconds() - ctx.t0;
     if (keys) *keys = ctx.keys;
     if (rc) {

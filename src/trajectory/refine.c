@@ -172,7 +172,7 @@ static double misfit(misfit_arg *a, double u, double v)
     sasnav_op *op = c->top[a->thread];
     sasnav_cfloat *d = c->td2 + c->nd * a->thread;
     sasnav_ping_pose pp = moved(a->pose, u, v);
-    int rc = sasnav_op_set_geometry(op, &pp);
+    int rc = sasnav_op_set_ping(op, &pp, c->run->channel_offset);
     if (!rc) rc = sasnav_op_forward(op, a->s, d);
     a->evals++;
     if (rc) {
@@ -405,7 +405,7 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const s
     }
     for (int p = 0; p < n && !rc; p++) {
         rc = sasnav_op_create(&run->sys, &run->array, &run->win, (int)c.np, px, py, &oo, &c.op[p]);
-        if (!rc) rc = sasnav_op_set_geometry(c.op[p], &cur[p]);
+        if (!rc) rc = sasnav_op_set_ping(c.op[p], &cur[p], run->channel_offset);
     }
     for (int t = 0; t < c.nthreads && !rc; t++)
         rc = sasnav_op_create(&run->sys, &run->array, &run->win, (int)c.np, px, py, &oo, &c.top[t]);
@@ -454,7 +454,7 @@ int sasnav_refine(const sasnav_run *run, const sasnav_ping_pose *nav_in, const s
                 cur[q] = moved(&cur[q], u, v);
                 mu_[q] += u;
                 mv_[q] += v;
-                rc = sasnav_op_set_geometry(c.op[q], &cur[q]);
+                rc = sasnav_op_set_ping(c.op[q], &cur[q], run->channel_offset);
                 sum_cost += cost;
                 sum_move += u * u + v * v;
             }

@@ -109,6 +109,7 @@ class RunC(Structure):  # run.h
         ("range_of_interest", c_double),
         ("aiding", POINTER(AidingC)),
         ("source", PingSourceC),
+        ("channel_offset", POINTER(PingPose)),
     ]
 
 
@@ -231,6 +232,8 @@ class ScenarioC(Structure):  # sim.h
         ("noise_seed", c_uint64),
         ("aiding", AidingParams),
         ("image_grid", GridC),
+        ("n_channel_tx", c_int),
+        ("channel_tx_u", c_double * MAX_RX),
     ]
 
 
@@ -438,6 +441,7 @@ class NavigationC(Structure):  # navigate.h: struct sasnav_navigation
         ("pairs_per_second", c_double),
         ("threads_over_pairs", c_int),
         ("packed", c_void_p),
+        ("gyro_tx_yaw", c_int),
     ]
 
 
@@ -504,6 +508,7 @@ PROTOTYPES = {
     "sasnav_wrap_angle": (_d, [_d]),
     # run.h
     "sasnav_run_alloc": (_i, [_P(SystemC), _P(SensorArrayC), _P(Window), _i, _i, _P(_P(RunC))]),
+    "sasnav_run_set_channel_offset": (_i, [_P(RunC), _P(PingPose)]),
     "sasnav_run_alloc_aiding": (_i, [_P(RunC), _i, _i]),
     "sasnav_run_check": (_i, [_P(RunC)]),
     "sasnav_run_ping": (cfloat_p, [_P(RunC), _i]),

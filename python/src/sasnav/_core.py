@@ -229,8 +229,11 @@ class Run:
     array, the sample window start t0 (s after transmission), the
     navigation to process with (`nav`, PING_POSE_DTYPE [n_pings]) and the
     true poses (`truth`, or None), the nominal ping spacing (m), speed (m/s),
-    EPCA Tx-array offset tx_lag (m), range of interest (m), and the aiding
-    measurements (or None)."""
+    EPCA Tx-array offset tx_lag (m), range of interest (m), the aiding
+    measurements (or None), and the channels' offsets (`channel_offset`,
+    PING_POSE_DTYPE [n_rx]: each channel's transmitter and array pose
+    relative to its ping's, sasnav_channel_poses; None for one transmitter
+    and N receivers; file format version 2)."""
 
     raw: np.ndarray
     system: System
@@ -243,6 +246,7 @@ class Run:
     tx_lag: float = 0.0
     range_of_interest: float = 0.0
     aiding: Optional[Aiding] = None
+    channel_offset: Optional[np.ndarray] = None
 
     @property
     def n_pings(self):
@@ -307,8 +311,9 @@ def _run_from_c(r):
         aiding = Aiding(arr(a.time, n, (n,)), arr(a.yaw_rate, n, (n,)),
                         arr(a.yaw_rate_sigma, n, (n,)), arr(a.velocity, 2 * n, (n, 2)),
                         arr(a.velocity_sigma, 2 * n, (n, 2)))
+    off = _copy_out(_addr(r.channel_offset), PING_POSE_DTYPE, nrx) if r.channel_offset else None
     return Run(raw, System._from_c(r.sys), SensorArray._from_c(r.array), r.win.t0, nav, truth,
-               r.ping_spacing, r.speed, r.tx_lag, r.range_of_interest, aiding)
+               r.ping_spacing, r.speed, r.tx_lag, r.range_of_interest, aiding, off)
 
 
 def _take_run(ptr):
@@ -347,6 +352,10 @@ def _c_run(run):
             _copy_in(_addr(r.truth), truth)
         r.ping_spacing, r.speed = float(run.ping_spacing), float(run.speed)
         r.tx_lag, r.range_of_interest = float(run.tx_lag), float(run.range_of_interest)
+        if run.channel_offset is not None:
+            off = ping_poses(run.channel_offset, nrx, "run.channel_offset")
+            check(L.sasnav_run_set_channel_offset(
+                ptr, ctypes.cast(off.ctypes.data, ctypes.POINTER(C.PingPose))))
         if run.aiding is not None:
             a = run.aiding
             gyro = a.yaw_rate is not None
@@ -405,6 +414,8 @@ class StreamedRun:
         self.ping_spacing, self.speed = r.ping_spacing, r.speed
         self.tx_lag, self.range_of_interest = r.tx_lag, r.range_of_interest
         self.has_aiding = bool(r.aiding)
+        self.channel_offset = (_copy_out(_addr(r.channel_offset), PING_POSE_DTYPE, r.array.n_rx)
+                               if r.channel_offset else None)
 
     def _c(self):
         if self._ptr is None:
