@@ -994,6 +994,18 @@ static void test_writers_fail_cleanly(void)
     CHECK_FAILS(sasnav_image_write(target, &grid, img), SASNAV_ERR_IO);
     CHECK(dir_count(dir, "") == before && dir_count(dir, ".tmp-") == 0, "temporary file left behind");
 
+    /* The target is a pipe (as /dev/null is a device): refused before
+     * anything is written; renaming onto it would replace it by a file. */
+    const char *fifo = tmp_file("a-fifo");
+    CHECK(mkfifo(fifo, 0644) == 0, "cannot make a FIFO");
+    CHECK_FAILS(sasnav_run_write(fifo, run), SASNAV_ERR_IO);
+    CHECK_FAILS(sasnav_nav_write(fifo, run->n_pings, run->nav, NULL), SASNAV_ERR_IO);
+    CHECK_FAILS(sasnav_image_write(fifo, &grid, img), SASNAV_ERR_IO);
+    CHECK(strstr(sasnav_last_error(), "not a regular file") != NULL, "message: %s", sasnav_last_error());
+    struct stat fst;
+    CHECK(stat(fifo, &fst) == 0 && S_ISFIFO(fst.st_mode), "the FIFO was replaced");
+    unlink(fifo);
+
     /* Invalid data: nothing is created, an existing file is kept. */
     const char *path = tmp_file("kept.h5");
     CHECK_OK(sasnav_run_write(path, run));

@@ -92,6 +92,12 @@ int sasnav_image_read(const char *path, sasnav_grid *grid, sasnav_cfloat **image
  * then ends the process (the sasnav tool installs one). */
 void sasnav_remove_partial_outputs(void);
 
+/* Whether `path` may be written that way: SASNAV_OK when it does not exist
+ * or is a regular file; SASNAV_ERR_IO (message naming it) when it is a
+ * device, a directory, a pipe or a socket, which the rename would replace
+ * (e.g. -o /dev/null). Every writer calls it first. */
+int sasnav_output_check(const char *path);
+
 #ifdef __cplusplus
 }
 #endif

@@ -69,7 +69,8 @@ sasnav_pose sasnav_channels_centroid(const sasnav_array *array, const sasnav_pin
 int sasnav_virtual_array(const sasnav_array *array, int k, sasnav_array *out);
 
 /* The channel layout of a virtual ping made of pings with poses
- * poses[0..k-1] (world frame): *centroid receives the centroid of its
+ * poses[0..k-1] (world frame; one transmitter per ping: sasnav_navigate_virtual
+ * also applies a run's channel_offset to each ping's channels): *centroid receives the centroid of its
  * k * n_rx channels (sasnav_channels_centroid), local[c] channel c's Tx
  * and array poses in that centroid's frame (k * n_rx entries). */
 int sasnav_virtual_layout(const sasnav_array *array, const sasnav_ping_pose *poses, int k,

@@ -4,6 +4,7 @@
 #include "io/textfile.h"
 
 #include "sasnav/error.h"
+#include "sasnav/io.h"
 #include "sasnav/model.h"
 
 #include <errno.h>
@@ -600,6 +601,8 @@ static uint64_t tmp_random(void)
 /* Creates an empty "<path>.tmp-XXXXXX" with O_EXCL (mode 0666 & ~umask). */
 static int tmp_create(h5_ctx *c)
 {
+    int rc0 = sasnav_output_check(c->path); /* its message names the file */
+    if (rc0) return rc0;
     static const char letters[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789";
     size_t n = strlen(c->path) + 16;
     char *tmp = malloc(n);

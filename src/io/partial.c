@@ -9,11 +9,14 @@
  * published slots. */
 #include "io/textfile.h"
 #include "sasnav/io.h"
+#include "sasnav/error.h"
 
 #include <pthread.h>
 #include <signal.h>
 #include <stdatomic.h>
+#include <errno.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #define PARTIAL_SLOTS 64
@@ -57,3 +60,15 @@ void sasnav_partial_hold(sigset_t *old)
 }
 
 void sasnav_partial_release(const sigset_t *old) { pthread_sigmask(SIG_SETMASK, old, NULL); }
+
+int sasnav_output_check(const char *path)
+{
+    if (!path || !*path) return sasnav_set_error(SASNAV_ERR_ARG, "empty output path");
+    struct stat st;
+    if (stat(path, &st) != 0) return SASNAV_OK; /* absent (or unreachable: the write says why) */
+    if (S_ISREG(st.st_mode)) return SASNAV_OK;
+    return sasnav_set_error(SASNAV_ERR_IO,
+                            "%s exists and is not a regular file (%s): outputs are written to a temporary "
+                            "file renamed onto the target, which would replace it; name a file",
+                            path, S_ISDIR(st.st_mode) ? "a directory" : S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) ? "a device" : S_ISFIFO(st.st_mode) ? "a pipe" : "not a file");
+}

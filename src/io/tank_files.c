@@ -23,6 +23,8 @@
  * temporary file renamed into place. */
 static int write_wav(const char *path, const float *data, int n_ch, int n_frames, double fs)
 {
+    int rc0 = sasnav_output_check(path);
+    if (rc0) return rc0;
     char tmp[4200];
     int k = snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid());
     if (k < 0 || (size_t)k >= sizeof tmp) return sasnav_set_error(SASNAV_ERR_ARG, "path too long: %s", path);

@@ -2,6 +2,7 @@
 #include "io/textfile.h"
 
 #include "sasnav/error.h"
+#include "sasnav/io.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -16,6 +17,8 @@ int sasnav_text_open(sasnav_text_out *out, const char *path)
     out->tmp[0] = '\0';
     out->partial = -1;
     if (!path || !*path) return sasnav_set_error(SASNAV_ERR_ARG, "empty output path");
+    int rc0 = sasnav_output_check(path);
+    if (rc0) return rc0;
     int len = snprintf(out->tmp, sizeof out->tmp, "%s.tmp-XXXXXX", path);
     if (len < 0 || (size_t)len >= sizeof out->tmp || strlen(path) >= sizeof out->path)
         return sasnav_set_error(SASNAV_ERR_ARG, "%s: path too long", path);

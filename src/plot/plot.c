@@ -14,6 +14,7 @@
  */
 #include "sasnav/plot.h"
 #include "sasnav/error.h"
+#include "sasnav/io.h"
 
 #include <plplot/plplot.h>
 
@@ -94,7 +95,8 @@ static int session_begin(plot_session *s, const char *path, int width, int heigh
         return sasnav_set_error(SASNAV_ERR_UNSUPPORTED,
                                 "plot: PLplot device '%s' is not installed (plplot-driver-cairo)",
                                 PLOT_DEVICE);
-    int rc = make_temp(path, s->tmp, sizeof s->tmp);
+    int rc = sasnav_output_check(path);
+    if (!rc) rc = make_temp(path, s->tmp, sizeof s->tmp);
     if (rc) return rc;
 
     PLINT stream = -1;

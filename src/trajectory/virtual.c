@@ -43,8 +43,10 @@ int sasnav_virtual_array(const sasnav_array *array, int k, sasnav_array *out)
     return SASNAV_OK;
 }
 
-int sasnav_virtual_layout(const sasnav_array *array, const sasnav_ping_pose *poses, int k,
-                          sasnav_ping_pose *local, sasnav_pose *centroid)
+/* sasnav_virtual_layout with the run's channel offsets (NULL: none). */
+static int layout_with_offsets(const sasnav_array *array, const sasnav_ping_pose *offset,
+                               const sasnav_ping_pose *poses, int k, sasnav_ping_pose *local,
+                               sasnav_pose *centroid)
 {
     if (!array || !poses || !local || !centroid)
         return sasnav_set_error(SASNAV_ERR_ARG, "virtual layout: NULL argument");
@@ -57,7 +59,9 @@ int sasnav_virtual_layout(const sasnav_array *array, const sasnav_ping_pose *pos
         if (!isfinite(p->tx.x) || !isfinite(p->tx.y) || !isfinite(p->tx.theta) ||
             !isfinite(p->array.x) || !isfinite(p->array.y) || !isfinite(p->array.theta))
             return sasnav_set_error(SASNAV_ERR_ARG, "virtual layout: pose of ping %d is not finite", j);
-        for (int l = 0; l < n; l++) local[j * n + l] = *p;
+        if (offset) sasnav_channel_poses(p, offset, n, &local[j * n]);
+        else
+            for (int l = 0; l < n; l++) local[j * n + l] = *p;
     }
     sasnav_pose c = sasnav_channels_centroid(&v, local);
     for (int i = 0; i < v.n_rx; i++) {
@@ -66,6 +70,12 @@ int sasnav_virtual_layout(const sasnav_array *array, const sasnav_ping_pose *pos
     }
     *centroid = c;
     return SASNAV_OK;
+}
+
+int sasnav_virtual_layout(const sasnav_array *array, const sasnav_ping_pose *poses, int k,
+                          sasnav_ping_pose *local, sasnav_pose *centroid)
+{
+    return layout_with_offsets(array, NULL, poses, k, local, centroid);
 }
 
 void sasnav_virtual_default_opts(sasnav_virtual_opts *opts)
@@ -143,7 +153,7 @@ static int group_layout(const vctx *c, const sasnav_ping_pose *nav, int first,
                         sasnav_ping_pose *gather, sasnav_ping_pose *local, sasnav_pose *centroid)
 {
     for (int j = 0; j < c->k; j++) gather[j] = nav[(first + c->m * j) % c->run->n_pings];
-    return sasnav_virtual_layout(&c->run->array, gather, c->k, local, centroid);
+    return layout_with_offsets(&c->run->array, c->run->channel_offset, gather, c->k, local, centroid);
 }
 
 /* One pass over the pairs with `nav` as the input navigation: layouts,
