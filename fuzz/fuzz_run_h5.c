@@ -1,6 +1,7 @@
 /* fuzz_run_h5: sasnav_run_read on structure-aware generated run files
  * (h5gen.h: the input drives the writing of a run file with fuzzed types,
- * shapes, values and members). Contract: SASNAV_OK with a run that passes
+ * shapes, values and members; /channels and format version 2 on one
+ * option bit). Contract: SASNAV_OK with a run that passes
  * sasnav_run_check, or SASNAV_ERR_FORMAT / IO / NOMEM with a message. */
 #include "fuzz_common.h"
 #include "h5gen.h"
@@ -71,6 +72,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             h5g_dataset(&g, f, "/aiding/velocity", D_REAL, 2, dv, fill_vel);
             h5g_dataset(&g, f, "/aiding/velocity_sigma", D_REAL, 2, dv, fill_sigma);
         }
+    }
+    if (opt & 16) { /* format version 2: per-channel offsets */
+        H5Adelete(f, "format_version");
+        h5g_attr(&g, f, "format_version", A_INT, 2, NULL);
+        hsize_t dc[2] = {nrx, 3};
+        h5g_group(f, "/channels");
+        h5g_dataset(&g, f, "/channels/tx", D_REAL, 2, dc, fill_zero);
+        h5g_dataset(&g, f, "/channels/array", D_REAL, 2, dc, fill_zero);
     }
     h5g_extras(&g, f);
     H5Fclose(f);

@@ -146,6 +146,16 @@ def cli_outputs():
             subprocess.run([CLI, "simulate", "--preset", "point", "--config", small, "--threads", "1"] + extra +
                            ["-o", h5], check=True, capture_output=True)
             out("fuzz_run_h5_raw", name, open(h5, "rb").read())
+        # format version 2: two channels with transmitters of their own
+        chan = os.path.join(tmp, "channels.yaml")
+        with open(chan, "w") as f:
+            f.write("preset: point\narray: {rx_positions: [0.0, 0.0], tx_positions: [-0.1, 0.1]}\n"
+                    "swath: {range_min: 9.9, range_max: 10.1}\n"
+                    "trajectory: {n_pings: 3, pair_error: none}\nnoise: {snr_db: inf}\n")
+        h5 = os.path.join(tmp, "run-channels.h5")
+        subprocess.run([CLI, "simulate", "--preset", "point", "--config", chan, "--threads", "1", "-o", h5],
+                       check=True, capture_output=True)
+        out("fuzz_run_h5_raw", "run-channels", open(h5, "rb").read())
         # the same run in HDF5's oldest format without checksums or filters
         # (as h5py or MATLAB may write): what HDF5's parsers see unprotected
         legacy = os.path.join(tmp, "legacy.h5")

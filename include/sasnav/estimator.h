@@ -318,7 +318,11 @@ typedef struct {
  * has its own estimator and Tx-array offset: run->tx_lag (motion_lag 0), or
  * the distance the vehicle covers while the pulse reaches the interval's
  * centre and returns, run->speed x 2 R / c (motion_lag 1; needs
- * run->speed > 0). The nominal displacement comes from run->nav. Returns
+ * run->speed > 0). A run with channel offsets uses its channels' layouts
+ * instead of the EPCA model (sasnav_pair_set_data_run; the Tx-array offset
+ * is the navigation's, motion_lag does not apply), with the gyro's
+ * transmitter yaw when the run has one. The nominal displacement comes
+ * from run->nav. Returns
  * SASNAV_OK when every interval was attempted (each interval's own status
  * in out[s].status), SASNAV_ERR_ARG for bad arguments (pings, n outside
  * 1..64, options: sasnav_pair_opts_check). */

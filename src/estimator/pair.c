@@ -884,6 +884,20 @@ int sasnav_pair_estimate_intervals(const sasnav_run *run, int p, int q,
                                 "intervals: the motion lag model needs the run's speed (it is 0)");
     sasnav_pose nominal = sasnav_ping_displacement(&run->nav[p], &run->nav[q]);
     double extent = opts->range_extent;
+    /* Channels with transmitters of their own and a gyro: the transmitters'
+     * yaw between transmission and reception (as navigate does). */
+    double *tx_yaw = NULL;
+    if (run->channel_offset && run->aiding && run->aiding->yaw_rate) {
+        tx_yaw = malloc(sizeof *tx_yaw * (size_t)run->n_pings);
+        if (!tx_yaw) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        double interval = run->speed > 0 && run->tx_lag > 0 ? run->tx_lag / run->speed
+                                                            : 2.0 * opts->range / run->sys.sound_speed;
+        rc = sasnav_run_tx_yaw(run, interval, tx_yaw);
+        if (rc) {
+            free(tx_yaw);
+            return rc;
+        }
+    }
     for (int s = 0; s < n; s++) {
         sasnav_pair_opts so = *opts;
         so.range_extent = extent / n;
@@ -897,11 +911,15 @@ int sasnav_pair_estimate_intervals(const sasnav_run *run, int p, int q,
         rc = sasnav_pair_create(&run->sys, &run->array, &run->win, &so, &pair);
         if (!rc)
             rc = sasnav_pair_set_data_run(pair, run, p, q, sasnav_run_ping(run, p), sasnav_run_ping(run, q),
-                                          nominal, NULL);
+                                          nominal, tx_yaw);
         if (!rc) rc = sasnav_pair_estimate(pair, &out[s].result);
         sasnav_pair_destroy(pair);
         out[s].status = rc;
-        if (rc == SASNAV_ERR_NOMEM || rc == SASNAV_ERR_FFT || rc == SASNAV_ERR_INTERNAL) return rc;
+        if (rc == SASNAV_ERR_NOMEM || rc == SASNAV_ERR_FFT || rc == SASNAV_ERR_INTERNAL) {
+            free(tx_yaw);
+            return rc;
+        }
     }
+    free(tx_yaw);
     return SASNAV_OK;
 }
