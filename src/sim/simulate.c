@@ -336,7 +336,7 @@ static int scenario_header(const sasnav_scenario *sc, int with_raw, sasnav_run *
         if (!run->nav || !run->truth) {
             sasnav_run_free(run);
             return sasnav_set_error(SASNAV_ERR_NOMEM, "cannot allocate the navigation of %d pings",
-                                    run->n_pings);
+                                    sc->traj.n_pings);
         }
     }
     if (rc) return rc;

@@ -75,21 +75,51 @@ static int sigma_ok(sasnav_pose s)
     return s.x > 0 && s.y > 0 && s.theta > 0 && isfinite(s.x) && isfinite(s.y) && isfinite(s.theta);
 }
 
-/* Number of ping q's phase centres that nominally fall on ping p's, for an
- * along-track nominal displacement `along` (PCA of receiver l at u_l / 2 in
- * the centroid frame, EPCA model). */
-static int overlapping_phase_centres(const sasnav_array *array, double along)
+/* Along-axis positions of a ping's phase centres in its centroid frame:
+ * u_l / 2 (EPCA model, one transmitter), or (Tx_l + Rx_l) / 2 of ping
+ * 0's channels where the run has channel offsets. */
+static void phase_centres(const sasnav_run *run, double *pc)
+{
+    if (!run->channel_offset) {
+        for (int l = 0; l < run->array.n_rx; l++) pc[l] = 0.5 * run->array.rx_u[l];
+        return;
+    }
+    sasnav_ping_pose ch[SASNAV_MAX_RX];
+    sasnav_run_channel_poses(run, &run->nav[0], ch);
+    sasnav_pose c = sasnav_ping_centroid(&run->nav[0]);
+    for (int l = 0; l < run->array.n_rx; l++) {
+        double rx, ry;
+        sasnav_pose_apply(ch[l].array, run->array.rx_u[l], 0.0, &rx, &ry);
+        sasnav_pose t = sasnav_pose_between(c, ch[l].tx), r = sasnav_pose_between(c, (sasnav_pose){rx, ry, 0});
+        pc[l] = 0.5 * (t.x + r.x);
+    }
+}
+
+/* Mean spacing of the sorted phase centres (0 for one). */
+static double phase_centre_spacing(const double *pc, int n)
 {
     double lo = INFINITY, hi = -INFINITY;
-    for (int l = 0; l < array->n_rx; l++) {
-        double v = 0.5 * array->rx_u[l];
+    for (int l = 0; l < n; l++) {
+        lo = fmin(lo, pc[l]);
+        hi = fmax(hi, pc[l]);
+    }
+    return n > 1 ? (hi - lo) / (n - 1) : 0.0;
+}
+
+/* Number of ping q's phase centres that nominally fall on ping p's, for an
+ * along-track nominal displacement `along` (pc: phase_centres). */
+static int overlapping_phase_centres(const double *pc, int n, double along)
+{
+    double lo = INFINITY, hi = -INFINITY;
+    for (int l = 0; l < n; l++) {
+        double v = pc[l];
         if (v < lo) lo = v;
         if (v > hi) hi = v;
     }
     const double tol = 1e-6;
     int k = 0;
-    for (int l = 0; l < array->n_rx; l++) {
-        double v = along + 0.5 * array->rx_u[l];
+    for (int l = 0; l < n; l++) {
+        double v = along + pc[l];
         if (v >= lo - tol && v <= hi + tol) k++;
     }
     return k;
@@ -416,9 +446,11 @@ static int estimate_all(nav_ctx *ctx, sasnav_navigation *out)
     int total = n - 1;
     char *use_long = calloc((size_t)(n_long > 0 ? n_long : 1), 1);
     if (!use_long) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    double pc[SASNAV_MAX_RX];
+    phase_centres(run, pc);
     for (int p = 0; p < n_long; p++) {
         sasnav_pose nom = sasnav_ping_displacement(&run->nav[p], &run->nav[p + 2]);
-        if (overlapping_phase_centres(&run->array, nom.x) >= 2) {
+        if (overlapping_phase_centres(pc, run->array.n_rx, nom.x) >= 2) {
             use_long[p] = 1;
             total++;
         } else {
@@ -1027,7 +1059,9 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
     if (!out->centroids || !out->nav) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
     const sasnav_navigate_opts *o = ctx->opts;
     int dvl = run->aiding && run->aiding->velocity && o->use_aiding;
-    if (o->speed_lags && o->method == SASNAV_METHOD_SUBSPACE && dvl) {
+    /* (channel layouts take their Tx-array offsets from the navigation:
+     * speed-scaled offsets do not apply to them) */
+    if (o->speed_lags && o->method == SASNAV_METHOD_SUBSPACE && dvl && !run->channel_offset) {
         ctx->lags = malloc(sizeof(double) * (size_t)n);
         if (!ctx->lags) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
         speed_lags(ctx, 1, ctx->lags);
@@ -1038,7 +1072,7 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
         if (!ctx->tx_yaw) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
         /* The time the navigation's Tx-array offset stands for (the
          * vehicle's travel between transmission and reception). */
-        double range = o->pair.range > 0 ? o->pair.range : run->range_of_interest;
+        double range = run->range_of_interest > 0 ? run->range_of_interest : o->pair.range; /* as the estimators' */
         double interval = run->speed > 0 && run->tx_lag > 0 ? run->tx_lag / run->speed
                                                             : 2.0 * range / run->sys.sound_speed;
         int r = sasnav_run_tx_yaw(run, interval, ctx->tx_yaw);
@@ -1047,7 +1081,8 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
     out->gyro_tx_yaw = ctx->tx_yaw != NULL;
     int rc = estimate_all(ctx, out);
     if (rc || ctx->n_parts > 1 || ctx->keys) return rc; /* a part: first estimates only */
-    if (o->speed_lags == 2 && o->method == SASNAV_METHOD_SUBSPACE && !ctx->lags && !o->reuse) {
+    if (o->speed_lags == 2 && o->method == SASNAV_METHOD_SUBSPACE && !ctx->lags && !o->reuse &&
+        !run->channel_offset) {
         for (int j = 0; j < out->n_pairs && !rc; j++) {
             sasnav_navigate_pair np;
             get_pair(ctx, j, &np);
@@ -1112,6 +1147,12 @@ static int navigate_run(const sasnav_run *run, const sasnav_navigate_opts *opts,
     nav_ctx ctx = {run, opts, NULL, 1, sasnav_now_seconds(),
                    run->array.n_rx > 1 ? 0.5 * fabs(run->array.rx_u[1] - run->array.rx_u[0]) : 0.025,
                    NULL, NULL, NULL, 0, options_digest(run, opts), part, n_parts, NULL, NULL, {0, NULL, NULL}};
+    if (run->channel_offset) { /* the layout's phase-centre spacing */
+        double pc[SASNAV_MAX_RX];
+        phase_centres(run, pc);
+        double d = phase_centre_spacing(pc, run->array.n_rx);
+        if (d > 0) ctx.pc_spacing = d;
+    }
     if (keys) {
         ctx.keys = calloc((size_t)(2 * run->n_pings), sizeof *ctx.keys);
         if (!ctx.keys) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");

@@ -981,7 +981,23 @@ def estimate_pair(run, p=0, q=1, *, prior_start=None, lags=None, **opts):
         check(L.sasnav_pair_create(ctypes.byref(sys_c), ctypes.byref(arr_c), ctypes.byref(win),
                                    ctypes.byref(po), ctypes.byref(pair)))
         dp, dq = raw[p].ctypes.data, raw[q].ctypes.data
-        if lags is None:
+        if run.channel_offset is not None:
+            # channels with transmitters of their own: their layouts (and the
+            # gyro's transmitter yaw), as `sasnav pair` / navigate
+            if lags is not None:
+                raise ValueError("lags do not apply to a run with channel offsets (its layouts give them)")
+            with _c_run(run) as r:
+                rc = r.contents
+                yaw = None
+                if rc.aiding and rc.aiding.contents.yaw_rate:
+                    interval = (run.tx_lag / run.speed if run.speed > 0 and run.tx_lag > 0
+                                else 2.0 * po.range / run.system.sound_speed)
+                    yaw = np.zeros(n)
+                    check(L.sasnav_run_tx_yaw(r, interval, yaw.ctypes.data_as(ctypes.POINTER(ctypes.c_double))))
+                check(L.sasnav_pair_set_data_run(
+                    pair, r, p, q, dp, dq, nominal,
+                    None if yaw is None else yaw.ctypes.data_as(ctypes.POINTER(ctypes.c_double))))
+        elif lags is None:
             check(L.sasnav_pair_set_data(pair, dp, dq, nominal))
         else:
             lp, lq = (float(v) for v in lags)
@@ -1320,7 +1336,11 @@ def image(run, grid=None, nav=None, *, ping=None, cgls=0, tikhonov=0.0, threads=
         check(L.sasnav_op_create(ctypes.byref(sys_c), ctypes.byref(arr_c), ctypes.byref(win), npx,
                                  x.ctypes.data_as(dptr), y.ctypes.data_as(dptr), ctypes.byref(oo),
                                  ctypes.byref(op)))
-        check(L.sasnav_op_set_geometry(op, _poses_ptr(poses[ping:ping + 1])))
+        off = getattr(run, "channel_offset", None)
+        if off is not None:
+            off = ping_poses(off, run.n_rx, "run.channel_offset")
+        check(L.sasnav_op_set_ping(op, _poses_ptr(poses[ping:ping + 1]),
+                                   None if off is None else _poses_ptr(off)))
         if cgls:
             co = C.CglsOpts(int(cgls), float(tikhonov))
             check(L.sasnav_cgls(op, data.ctypes.data, ctypes.byref(co), out.ctypes.data, None))
