@@ -342,6 +342,10 @@ static void compare_scenarios(const char *label, const sasnav_scenario *a, const
                   a->target_amp[i] == b->target_amp[i],
               "%s: target %d", label, i);
     CHECK(strcmp(a->scene_file, b->scene_file) == 0, "%s: scene file", label);
+    CHECK(a->n_channel_tx == b->n_channel_tx, "%s: %d vs %d channel transmitters", label, a->n_channel_tx,
+          b->n_channel_tx);
+    for (int l = 0; l < a->n_channel_tx && l < SASNAV_MAX_RX; l++)
+        CHECK(a->channel_tx_u[l] == b->channel_tx_u[l], "%s: channel %d's transmitter", label, l);
     CHECK(a->snr_db == b->snr_db && a->noise_seed == b->noise_seed, "%s: noise %g vs %g", label,
           a->snr_db, b->snr_db);
     const sasnav_grid *ga = &a->image_grid, *gb = &b->image_grid;
@@ -388,6 +392,9 @@ static void test_round_trip(const char *dir)
     memcpy(sc.array.rx_u, u, sizeof u);
     sc.array.rx_height = 0.7;
     sc.array.tx_height = 0.1 + 0.2;
+    sc.n_channel_tx = 5; /* channels with transmitters of their own */
+    double tu[5] = {-0.2, 1.0 / 3.0, 0.0, 0.15, -1e-3};
+    memcpy(sc.channel_tx_u, tu, sizeof tu);
     sc.traj.pair_q = 1;
     sc.traj.pair_error = (sasnav_pose){1e-300, -2.5e-5, 0.1};
     sc.traj.seed = UINT64_MAX;

@@ -473,6 +473,23 @@ static int read_real_item(loader *L, struct fy_node *item, int line, const char 
     return rc;
 }
 
+/* A sequence of at most SASNAV_MAX_RX reals into out[], its length into *n. */
+static int read_real_list(loader *L, struct fy_node *node, int line, double *out, int *n)
+{
+    void *iter = NULL;
+    struct fy_node *item;
+    int i = 0;
+    while ((item = fy_node_sequence_iterate(node, &iter))) {
+        char suffix[24];
+        snprintf(suffix, sizeof suffix, "[%d]", i);
+        int rc = read_real_item(L, item, line, suffix, &out[i]);
+        if (rc) return rc;
+        i++;
+    }
+    *n = i;
+    return SASNAV_OK;
+}
+
 static int read_positions(loader *L, struct fy_node *node, int line)
 {
     if (!node || !fy_node_is_sequence(node))
@@ -480,19 +497,9 @@ static int read_positions(loader *L, struct fy_node *node, int line)
     int n = fy_node_sequence_item_count(node);
     if (n < 1 || n > SASNAV_MAX_RX)
         return fail(L, line, "needs 1..%d positions, got %d", SASNAV_MAX_RX, n);
-    void *iter = NULL;
-    struct fy_node *item;
-    int i = 0;
-    while ((item = fy_node_sequence_iterate(node, &iter))) {
-        char suffix[24];
-        snprintf(suffix, sizeof suffix, "[%d]", i);
-        int rc = read_real_item(L, item, line, suffix, &L->array.positions[i]);
-        if (rc) return rc;
-        i++;
-    }
-    L->array.n_positions = n;
-    L->array.set_positions = 1;
-    return SASNAV_OK;
+    int rc = read_real_list(L, node, line, L->array.positions, &L->array.n_positions);
+    if (!rc) L->array.set_positions = 1;
+    return rc;
 }
 
 static int read_tx_positions(loader *L, struct fy_node *node, int line)
@@ -501,18 +508,7 @@ static int read_tx_positions(loader *L, struct fy_node *node, int line)
         return fail(L, line, "expected a sequence of transmitter positions [u0, u1, ...] in metres, one per channel");
     int n = fy_node_sequence_item_count(node);
     if (n > SASNAV_MAX_RX) return fail(L, line, "needs 0..%d positions, got %d", SASNAV_MAX_RX, n);
-    void *iter = NULL;
-    struct fy_node *item;
-    int i = 0;
-    while ((item = fy_node_sequence_iterate(node, &iter))) {
-        char suffix[24];
-        snprintf(suffix, sizeof suffix, "[%d]", i);
-        int rc = read_real_item(L, item, line, suffix, &L->sc.channel_tx_u[i]);
-        if (rc) return rc;
-        i++;
-    }
-    L->sc.n_channel_tx = n;
-    return SASNAV_OK;
+    return read_real_list(L, node, line, L->sc.channel_tx_u, &L->sc.n_channel_tx);
 }
 
 static int read_targets(loader *L, struct fy_node *node, int line)
