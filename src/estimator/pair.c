@@ -472,15 +472,25 @@ int sasnav_run_tx_yaw(const sasnav_run *run, double interval, double *tx_yaw)
         return sasnav_set_error(SASNAV_ERR_ARG, "transmitter yaw: interval %g s must be >= 0", interval);
     const sasnav_aiding *a = run->aiding;
     double t2 = interval;
-    for (int p = 0; p < run->n_pings; p++) {
-        double sum = 0;
-        int w = 0;
-        for (int j = p; j <= p + 1; j++) /* the intervals ending at p and at p + 1 */
-            if (j >= 1 && j < run->n_pings && isfinite(a->yaw_rate_sigma[j])) {
-                sum += a->yaw_rate[j];
-                w++;
-            }
-        tx_yaw[p] = w ? -t2 * sum / w : 0.0;
+    int n = run->n_pings;
+    for (int p = 0; p < n; p++) {
+        /* The heading the aiding refers to is the centroid frame's, the
+         * array's at reception (time[p]); the turn between transmission
+         * and reception is the rate at their midpoint, interval / 2
+         * before it: interpolated linearly between the means of the two
+         * intervals around it, each placed at its interval's middle. */
+        int lo = p, hi = p + 1; /* intervals ending at p and at p + 1 */
+        int ok_lo = lo >= 1 && isfinite(a->yaw_rate_sigma[lo]), ok_hi = hi < n && isfinite(a->yaw_rate_sigma[hi]);
+        double r = 0.0;
+        if (ok_lo && ok_hi) {
+            double t = a->time[p] - 0.5 * t2;
+            double m_lo = 0.5 * (a->time[lo - 1] + a->time[lo]), m_hi = 0.5 * (a->time[hi - 1] + a->time[hi]);
+            double w = (t - m_lo) / (m_hi - m_lo);
+            r = (1.0 - w) * a->yaw_rate[lo] + w * a->yaw_rate[hi];
+        } else if (ok_lo || ok_hi) {
+            r = a->yaw_rate[ok_lo ? lo : hi];
+        }
+        tx_yaw[p] = -t2 * r;
     }
     return SASNAV_OK;
 }
