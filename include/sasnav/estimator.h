@@ -271,15 +271,16 @@ int sasnav_pair_set_data_run(sasnav_pair *pair, const sasnav_run *run, int p, in
 /* The transmitter's yaw at transmission relative to the array's at
  * reception, per ping, from the run's gyro: -r x interval, interval the
  * time from transmission to reception that the navigation's Tx-array
- * offset stands for (tx_lag / speed; 2 R / c for a real ping at range R),
+ * offset stands for (tx_lag / speed where the run has both; otherwise
+ * 2 range / c, the two-way delay at `range`),
  * r the yaw rate at the midpoint of transmission and reception: the
  * aiding's headings are the centroid frames', i.e. the array's at
  * reception (time[p]), so r is interpolated linearly at time[p] -
  * interval / 2 between the mean rates of the two ping intervals around
  * the ping, each placed at its interval's middle (one of them alone where
  * the other has no measurement; 0 where neither has). Errors: no gyro in
- * the run, interval < 0. */
-int sasnav_run_tx_yaw(const sasnav_run *run, double interval, double *tx_yaw);
+ * the run, an interval that is not finite and >= 0. */
+int sasnav_run_tx_yaw(const sasnav_run *run, double range, double *tx_yaw);
 
 /* Evaluates zeta and eta at a hypothesised MOTION ERROR (displacement =
  * nominal + error). level 0: coarse pixels, coarse (k, i); level 1: full

@@ -463,15 +463,18 @@ static void run_layout(const sasnav_run *run, int p, const double *tx_yaw, sasna
     }
 }
 
-int sasnav_run_tx_yaw(const sasnav_run *run, double interval, double *tx_yaw)
+int sasnav_run_tx_yaw(const sasnav_run *run, double range, double *tx_yaw)
 {
     if (!run || !tx_yaw) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
     if (!run->aiding || !run->aiding->yaw_rate)
         return sasnav_set_error(SASNAV_ERR_ARG, "transmitter yaw: the run has no gyro measurements");
-    if (!(interval >= 0) || !isfinite(interval))
-        return sasnav_set_error(SASNAV_ERR_ARG, "transmitter yaw: interval %g s must be >= 0", interval);
+    /* The time the navigation's Tx-array offset stands for (the vehicle's
+     * travel between transmission and reception), else the two-way delay. */
+    double t2 = run->speed > 0 && run->tx_lag > 0 ? run->tx_lag / run->speed : 2.0 * range / run->sys.sound_speed;
+    if (!(t2 >= 0) || !isfinite(t2))
+        return sasnav_set_error(SASNAV_ERR_ARG, "transmitter yaw: interval %g s must be >= 0 (range %g m)", t2,
+                                range);
     const sasnav_aiding *a = run->aiding;
-    double t2 = interval;
     int n = run->n_pings;
     for (int p = 0; p < n; p++) {
         /* The heading the aiding refers to is the centroid frame's, the
@@ -900,9 +903,7 @@ int sasnav_pair_estimate_intervals(const sasnav_run *run, int p, int q,
     if (run->channel_offset && run->aiding && run->aiding->yaw_rate) {
         tx_yaw = malloc(sizeof *tx_yaw * (size_t)run->n_pings);
         if (!tx_yaw) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-        double interval = run->speed > 0 && run->tx_lag > 0 ? run->tx_lag / run->speed
-                                                            : 2.0 * opts->range / run->sys.sound_speed;
-        rc = sasnav_run_tx_yaw(run, interval, tx_yaw);
+        rc = sasnav_run_tx_yaw(run, opts->range, tx_yaw);
         if (rc) {
             free(tx_yaw);
             return rc;

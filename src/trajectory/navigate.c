@@ -1070,12 +1070,8 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
         o->method == SASNAV_METHOD_SUBSPACE) {
         ctx->tx_yaw = malloc(sizeof(double) * (size_t)n);
         if (!ctx->tx_yaw) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-        /* The time the navigation's Tx-array offset stands for (the
-         * vehicle's travel between transmission and reception). */
         double range = run->range_of_interest > 0 ? run->range_of_interest : o->pair.range; /* as the estimators' */
-        double interval = run->speed > 0 && run->tx_lag > 0 ? run->tx_lag / run->speed
-                                                            : 2.0 * range / run->sys.sound_speed;
-        int r = sasnav_run_tx_yaw(run, interval, ctx->tx_yaw);
+        int r = sasnav_run_tx_yaw(run, range, ctx->tx_yaw);
         if (r) return r;
     }
     out->gyro_tx_yaw = ctx->tx_yaw != NULL;

@@ -990,10 +990,8 @@ def estimate_pair(run, p=0, q=1, *, prior_start=None, lags=None, **opts):
                 rc = r.contents
                 yaw = None
                 if rc.aiding and rc.aiding.contents.yaw_rate:
-                    interval = (run.tx_lag / run.speed if run.speed > 0 and run.tx_lag > 0
-                                else 2.0 * po.range / run.system.sound_speed)
                     yaw = np.zeros(n)
-                    check(L.sasnav_run_tx_yaw(r, interval, yaw.ctypes.data_as(ctypes.POINTER(ctypes.c_double))))
+                    check(L.sasnav_run_tx_yaw(r, po.range, yaw.ctypes.data_as(ctypes.POINTER(ctypes.c_double))))
                 check(L.sasnav_pair_set_data_run(
                     pair, r, p, q, dp, dq, nominal,
                     None if yaw is None else yaw.ctypes.data_as(ctypes.POINTER(ctypes.c_double))))
