@@ -72,6 +72,12 @@ static const char *help =
     "                    extra cost; otherwise none), pairs (the DVL, or\n"
     "                    without one the pairs' first surge estimates and a\n"
     "                    second estimate of every pair: ~1.8x the time)\n"
+    "  --tx-yaw M        channels with transmitters of their own: the yaw\n"
+    "                    between transmission and reception that turns each\n"
+    "                    transmitter: auto (default: from the gyro when the\n"
+    "                    run has one, otherwise from the pairs' own yaw\n"
+    "                    estimates and a second estimate of every ok pair),\n"
+    "                    pairs (from the pairs even with a gyro), none\n"
     "  --aiding-bias S,W,Y  estimate a constant error of the aiding per ping\n"
     "                    interval (a DVL's bias and scale factor) with these\n"
     "                    standard deviations (m, m, rad; default\n"
@@ -204,6 +210,8 @@ static void print_json(const char *input, const sasnav_navigation *nav)
     json_object_set_new(root, "resolved_pairs", json_integer(nav->n_resolved));
     json_object_set_new(root, "aiding_used", json_boolean(nav->aiding_used));
     json_object_set_new(root, "gyro_tx_yaw", json_boolean(nav->gyro_tx_yaw));
+    json_object_set_new(root, "tx_yaw",
+                        json_string(nav->gyro_tx_yaw ? "gyro" : nav->pairs_tx_yaw ? "pairs" : "none"));
     json_object_set_new(root, "skipped_long_baselines", json_integer(nav->n_skipped));
     json_object_set_new(root, "has_truth", json_boolean(nav->has_truth));
     if (nav->has_truth) {
@@ -437,6 +445,7 @@ int cmd_navigate(int argc, char **argv)
         {"range-extent", required_argument, 0, 'E'}, {"no-aiding", no_argument, 0, 'N'},
         {"no-resolve", no_argument, 0, 'R'}, {"motion-sigma", required_argument, 0, 'M'},
         {"speed-lags", required_argument, 0, 'S'}, {"aiding-bias", required_argument, 0, 'B'},
+        {"tx-yaw", required_argument, 0, 'Y'},
         {"checkpoint", required_argument, 0, 'C'},
         {"virtual-array", required_argument, 0, 'V'}, {"stride", required_argument, 0, 'T'},
         {"iterations", required_argument, 0, 'I'}, {"estimate-yaw", no_argument, 0, 'W'},
@@ -530,6 +539,12 @@ int cmd_navigate(int argc, char **argv)
             else if (!strcmp(optarg, "dvl")) no.speed_lags = 1;
             else if (!strcmp(optarg, "pairs")) no.speed_lags = 2;
             else return cli_usage("navigate", "--speed-lags needs none, dvl or pairs (got '%s')", optarg);
+            break;
+        case 'Y':
+            if (!strcmp(optarg, "none")) no.tx_yaw = 0;
+            else if (!strcmp(optarg, "auto")) no.tx_yaw = 1;
+            else if (!strcmp(optarg, "pairs")) no.tx_yaw = 2;
+            else return cli_usage("navigate", "--tx-yaw needs auto, pairs or none (got '%s')", optarg);
             break;
         case 'R': no.resolve = 0; break;
         case 'M': {
@@ -705,11 +720,12 @@ int cmd_navigate(int argc, char **argv)
     if (nav.n_skipped > 0)
         fprintf(stderr, "sasnav navigate: %d long baselines skipped (< 2 phase centres overlap)\n",
                 nav.n_skipped);
-    if (channel_tx && nav.method == SASNAV_METHOD_SUBSPACE && !nav.gyro_tx_yaw)
+    if (channel_tx && nav.method == SASNAV_METHOD_SUBSPACE && !nav.gyro_tx_yaw && !nav.pairs_tx_yaw)
         fprintf(stderr,
-                "sasnav navigate: warning: the channels have transmitters of their own and no gyro is used: "
-                "the vehicle's yaw between transmission and reception is taken as zero (it moves each "
-                "transmitter sideways by its lever arm x that yaw; docs/model.md, \"Channel layouts\")\n");
+                "sasnav navigate: warning: the channels have transmitters of their own and neither a gyro "
+                "nor the pairs gave the vehicle's yaw between transmission and reception: it is taken as "
+                "zero (it moves each transmitter sideways by its lever arm x that yaw; docs/model.md, "
+                "\"Channel layouts\")\n");
     if (json) print_json(input, &nav);
     else print_text(&nav);
     fprintf(stderr, "sasnav navigate: %d pings -> %s\n", nav.n_pings, output);

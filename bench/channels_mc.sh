@@ -3,10 +3,14 @@
 # (docs/model.md, "Channel layouts"): paper-trajectory (16 pings, 30 dB,
 # true bistatic poses, smooth motion errors) with the head of
 # examples/two_tx_head.yaml, seeds S0 .. S0 + N - 1, each simulated with
-# aiding. Three navigations per seed:
+# aiding. Navigations per seed (VARIANTS, default all five):
 #   two_gyro   the two-Tx run, default: layouts with the gyro's transmitter
 #              yaw, aiding fused
-#   two_plain  the two-Tx run with --no-aiding: transmitter yaw 0, no fusion
+#   two_pairs  the two-Tx run with --no-aiding: transmitter yaw from the
+#              pairs' own yaw estimates (--tx-yaw auto without a gyro), no
+#              fusion
+#   two_plain  the two-Tx run with --no-aiding --tx-yaw none: transmitter
+#              yaw 0, no fusion
 #   one_aided  the same seed with the paper's one-Tx head, aiding fused
 #   one_plain  the same one-Tx run with --no-aiding
 # (the pair errors are the raw estimates', before any fusion: two_gyro
@@ -16,8 +20,10 @@
 # (raw estimates: estimate - truth) and of |final sway error|, and the runs
 # within lambda / 25 = 0.2 mm final sway.
 #
-# usage: sh bench/channels_mc.sh path/to/sasnav [S0 N] [WORKDIR]
+# usage: [VARIANTS="two_pairs ..."] sh bench/channels_mc.sh path/to/sasnav [S0 N] [WORKDIR]
+# (an existing WORKDIR keeps its runs and the navigations not asked for)
 set -eu
+VARIANTS=${VARIANTS:-two_gyro two_pairs two_plain one_aided one_plain}
 CLI=${1:?usage: channels_mc.sh path/to/sasnav [S0 N] [WORKDIR]}
 S0=${2:-2001}
 N=${3:-10}
@@ -26,18 +32,26 @@ HERE=$(cd "$(dirname "$0")/.." && pwd)
 mkdir -p "$DIR"
 s=$S0
 while [ "$s" -lt $((S0 + N)) ]; do
-    "$CLI" simulate --preset paper-trajectory --config "$HERE/examples/two_tx_head.yaml" --seed "$s" \
-        --snr 30 --aiding -o "$DIR/two_$s.h5" 2>/dev/null
-    "$CLI" simulate --preset paper-trajectory --seed "$s" --snr 30 --aiding -o "$DIR/one_$s.h5" 2>/dev/null
-    "$CLI" navigate "$DIR/two_$s.h5" --json -o "$DIR/n.h5" 2>/dev/null > "$DIR/two_gyro_$s.json"
-    "$CLI" navigate "$DIR/two_$s.h5" --no-aiding --json -o "$DIR/n.h5" 2>/dev/null > "$DIR/two_plain_$s.json"
-    "$CLI" navigate "$DIR/one_$s.h5" --json -o "$DIR/n.h5" 2>/dev/null > "$DIR/one_aided_$s.json"
-    "$CLI" navigate "$DIR/one_$s.h5" --no-aiding --json -o "$DIR/n.h5" 2>/dev/null > "$DIR/one_plain_$s.json"
+    [ -f "$DIR/two_$s.h5" ] || "$CLI" simulate --preset paper-trajectory \
+        --config "$HERE/examples/two_tx_head.yaml" --seed "$s" --snr 30 --aiding -o "$DIR/two_$s.h5" 2>/dev/null
+    [ -f "$DIR/one_$s.h5" ] || "$CLI" simulate --preset paper-trajectory --seed "$s" --snr 30 --aiding \
+        -o "$DIR/one_$s.h5" 2>/dev/null
+    for v in $VARIANTS; do
+        case $v in
+            two_gyro) set -- "$DIR/two_$s.h5" ;;
+            two_pairs) set -- "$DIR/two_$s.h5" --no-aiding ;;
+            two_plain) set -- "$DIR/two_$s.h5" --no-aiding --tx-yaw none ;;
+            one_aided) set -- "$DIR/one_$s.h5" ;;
+            one_plain) set -- "$DIR/one_$s.h5" --no-aiding ;;
+            *) echo "channels_mc.sh: unknown variant $v" >&2; exit 2 ;;
+        esac
+        "$CLI" navigate "$@" --json -o "$DIR/n.h5" 2>/dev/null > "$DIR/${v}_$s.json"
+    done
     echo "seed $s done" >&2
     s=$((s + 1))
 done
 python3 - "$DIR" "$S0" "$N" <<'PY'
-import json, math, sys
+import json, math, os, sys
 def median(v):
     v = sorted(v); k = len(v)
     return 0.5 * (v[(k - 1) // 2] + v[k // 2])
@@ -48,8 +62,10 @@ d, s0, n = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 print(f"seeds {s0}..{s0 + n - 1}, paper-trajectory 30 dB, 16 pings")
 print(f"{'variant':<10} {'pair sway mm median/p95':>24} {'final sway mm median/p95':>25} "
       f"{'<= 0.2 mm':>9} {'flagged':>7}")
-for v in ("two_gyro", "two_plain", "one_aided", "one_plain"):
+for v in ("two_gyro", "two_pairs", "two_plain", "one_aided", "one_plain"):
     pair, final, flagged = [], [], 0
+    if not os.path.exists(f"{d}/{v}_{s0}.json"):
+        continue
     for s in range(s0, s0 + n):
         j = json.load(open(f"{d}/{v}_{s}.json"))
         final.append(abs(j["final_sway_error"]) * 1e3)

@@ -3,7 +3,8 @@
 # "/channels"; docs/model.md, "Channel layouts"): `simulate` with the
 # two-transmitter head of examples/two_tx_head.yaml writes a version-2 run
 # with /channels; `image` focuses its point target; `navigate` (subspace)
-# works on it and warns that no gyro is used, its JSON says so; DPCA is
+# works on it, without a gyro the transmitters' turn from the pairs (JSON
+# tx_yaw "pairs", no warning; --tx-yaw none warns); DPCA is
 # refused (status 1, a message, no output file); a config whose
 # tx_positions do not match the channels is refused (status 1); a run without
 # transmitters of its own is still written as version 1.
@@ -66,13 +67,26 @@ EOF
 sed -n '/^array:/,$p' "$HERE/examples/two_tx_head.yaml" >> "$T/tiny.yaml"
 "$CLI" simulate --config "$T/tiny.yaml" -o "$T/run.h5" 2> /dev/null || fail "simulate tiny"
 if "$CLI" navigate "$T/run.h5" --k 2 --i 1 --json -o "$T/nav.h5" > "$T/nav.json" 2> "$T/nav.err"; then
-    grep -q "no gyro is used" "$T/nav.err" || fail "no warning that the transmitters' yaw is taken as zero"
+    # no gyro: the transmitters' turn from the pairs' own yaw estimates
+    grep -q '"tx_yaw": "pairs"' "$T/nav.json" || fail "JSON lacks tx_yaw pairs"
     grep -q '"gyro_tx_yaw": false' "$T/nav.json" || fail "JSON lacks gyro_tx_yaw false"
+    grep -q "warning" "$T/nav.err" && fail "a warning although the pairs gave the transmitters' yaw"
     [ -s "$T/nav.h5" ] || fail "no navigation file"
 else
     cat "$T/nav.err" >&2
     fail "navigate"
 fi
+if "$CLI" navigate "$T/run.h5" --k 2 --i 1 --tx-yaw none --json -o "$T/nav0.h5" > "$T/nav0.json" \
+    2> "$T/nav0.err"; then
+    grep -q "taken as zero" "$T/nav0.err" || fail "no warning that the transmitters' yaw is taken as zero"
+    grep -q '"tx_yaw": "none"' "$T/nav0.json" || fail "JSON lacks tx_yaw none"
+else
+    cat "$T/nav0.err" >&2
+    fail "navigate --tx-yaw none"
+fi
+"$CLI" navigate "$T/run.h5" --tx-yaw sideways -o "$T/bad.h5" 2> /dev/null
+[ $? -eq 2 ] || fail "--tx-yaw sideways: status other than 2"
+[ -e "$T/bad.h5" ] && fail "--tx-yaw sideways wrote a file"
 if "$CLI" navigate "$T/run.h5" --method dpca -o "$T/dpca.h5" 2> "$T/dpca.err"; then
     fail "DPCA accepted a run whose channels have transmitters of their own"
 else

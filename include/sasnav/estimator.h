@@ -282,6 +282,18 @@ int sasnav_pair_set_data_run(sasnav_pair *pair, const sasnav_run *run, int p, in
  * the run, an interval that is not finite and >= 0. */
 int sasnav_run_tx_yaw(const sasnav_run *run, double range, double *tx_yaw);
 
+/* The interpolation of sasnav_run_tx_yaw on any abscissa: epoch[n]
+ * (strictly increasing; time in s, or distance along the track in m),
+ * rate[p] the mean turn rate over (epoch[p - 1], epoch[p]] (rad per unit
+ * of epoch; used where valid[p] != 0; entry 0 is not used), interval the
+ * span between transmission and reception in the same unit (>= 0).
+ * tx_yaw[p] = -interval x the rate at epoch[p] - interval / 2. What
+ * sasnav_navigate uses without a gyro, with the rates from its own first
+ * estimates (yaw per metre of track). Errors: NULL arguments, n < 1, an
+ * interval that is not finite and >= 0. */
+int sasnav_tx_yaw_from_rates(int n, const double *epoch, const double *rate, const unsigned char *valid,
+                             double interval, double *tx_yaw);
+
 /* Evaluates zeta and eta at a hypothesised MOTION ERROR (displacement =
  * nominal + error). level 0: coarse pixels, coarse (k, i); level 1: full
  * pixels, coarse (k, i); level 2: full pixels, final (k, i). blurred != 0

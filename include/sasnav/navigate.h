@@ -190,6 +190,19 @@ typedef struct {
                                  your DVL's scale-factor spec x the ping
                                  step); the fused table of
                                  docs/navigation.md ("Aiding bias") */
+    int tx_yaw;               /* runs with channel offsets (transmitters of
+                                 their own), subspace method: the vehicle's
+                                 yaw between transmission and reception
+                                 turns each transmitter (docs/model.md).
+                                 1 (default): from the gyro when the run
+                                 has one and use_aiding is on, otherwise
+                                 from the pairs' own first estimates (the
+                                 track's turn per metre times the distance
+                                 tx_lag; every ok consecutive pair then
+                                 estimated again, local stages; not with
+                                 reuse); 2: from the pairs even with a
+                                 gyro; 0: none (each transmitter keeps the
+                                 array's heading) */
     const sasnav_navigation *reuse; /* a navigation of the same run by the
                                  same method and pair options: its pairs'
                                  first estimates (first_result) are used
@@ -294,6 +307,10 @@ struct sasnav_navigation {
                                      layouts turned each transmitter by the
                                      gyro's yaw between transmission and
                                      reception (sasnav_run_tx_yaw) */
+    int pairs_tx_yaw;             /* 1: such a run whose transmitters were
+                                     turned by the yaw from the pairs' own
+                                     first estimates (opts.tx_yaw) and its
+                                     ok consecutive pairs estimated again */
 };
 
 /* Pair j (0 <= j < n_pairs) of `nav`, whether its pairs are packed

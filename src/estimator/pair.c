@@ -463,6 +463,34 @@ static void run_layout(const sasnav_run *run, int p, const double *tx_yaw, sasna
     }
 }
 
+int sasnav_tx_yaw_from_rates(int n, const double *epoch, const double *rate, const unsigned char *valid,
+                             double interval, double *tx_yaw)
+{
+    if (n < 1 || !epoch || !rate || !valid || !tx_yaw) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    if (!(interval >= 0) || !isfinite(interval))
+        return sasnav_set_error(SASNAV_ERR_ARG, "transmitter yaw: interval %g must be finite and >= 0", interval);
+    for (int p = 0; p < n; p++) {
+        /* The heading of ping p is the array's at reception (epoch[p]); the
+         * turn between transmission and reception is the rate at their
+         * midpoint, interval / 2 before it: interpolated linearly between
+         * the means of the two intervals around it, each placed at its
+         * interval's middle. */
+        int lo = p, hi = p + 1; /* intervals ending at p and at p + 1 */
+        int ok_lo = lo >= 1 && valid[lo], ok_hi = hi < n && valid[hi];
+        double r = 0.0;
+        if (ok_lo && ok_hi) {
+            double t = epoch[p] - 0.5 * interval;
+            double m_lo = 0.5 * (epoch[lo - 1] + epoch[lo]), m_hi = 0.5 * (epoch[hi - 1] + epoch[hi]);
+            double w = (t - m_lo) / (m_hi - m_lo);
+            r = (1.0 - w) * rate[lo] + w * rate[hi];
+        } else if (ok_lo || ok_hi) {
+            r = rate[ok_lo ? lo : hi];
+        }
+        tx_yaw[p] = -interval * r;
+    }
+    return SASNAV_OK;
+}
+
 int sasnav_run_tx_yaw(const sasnav_run *run, double range, double *tx_yaw)
 {
     if (!run || !tx_yaw) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
@@ -476,26 +504,12 @@ int sasnav_run_tx_yaw(const sasnav_run *run, double range, double *tx_yaw)
                                 range);
     const sasnav_aiding *a = run->aiding;
     int n = run->n_pings;
-    for (int p = 0; p < n; p++) {
-        /* The heading the aiding refers to is the centroid frame's, the
-         * array's at reception (time[p]); the turn between transmission
-         * and reception is the rate at their midpoint, interval / 2
-         * before it: interpolated linearly between the means of the two
-         * intervals around it, each placed at its interval's middle. */
-        int lo = p, hi = p + 1; /* intervals ending at p and at p + 1 */
-        int ok_lo = lo >= 1 && isfinite(a->yaw_rate_sigma[lo]), ok_hi = hi < n && isfinite(a->yaw_rate_sigma[hi]);
-        double r = 0.0;
-        if (ok_lo && ok_hi) {
-            double t = a->time[p] - 0.5 * t2;
-            double m_lo = 0.5 * (a->time[lo - 1] + a->time[lo]), m_hi = 0.5 * (a->time[hi - 1] + a->time[hi]);
-            double w = (t - m_lo) / (m_hi - m_lo);
-            r = (1.0 - w) * a->yaw_rate[lo] + w * a->yaw_rate[hi];
-        } else if (ok_lo || ok_hi) {
-            r = a->yaw_rate[ok_lo ? lo : hi];
-        }
-        tx_yaw[p] = -t2 * r;
-    }
-    return SASNAV_OK;
+    unsigned char *valid = malloc((size_t)n);
+    if (!valid) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    for (int p = 0; p < n; p++) valid[p] = isfinite(a->yaw_rate_sigma[p]) != 0;
+    int rc = sasnav_tx_yaw_from_rates(n, a->time, a->yaw_rate, valid, t2, tx_yaw);
+    free(valid);
+    return rc;
 }
 
 int sasnav_pair_set_data_run(sasnav_pair *pr, const sasnav_run *run, int p, int q,

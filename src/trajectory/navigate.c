@@ -32,6 +32,7 @@ void sasnav_navigate_default_opts(sasnav_navigate_opts *opts)
     opts->aiding_gate = 5.0;
     opts->speed_lags = 1;
     opts->aiding_bias_sigma = (sasnav_pose){4e-4, 4e-4, 0};
+    opts->tx_yaw = 1;
     opts->nthreads = 0;
     opts->progress = NULL;
     opts->progress_user = NULL;
@@ -414,6 +415,7 @@ static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: aiding bias standard deviations must be finite and >= 0");
     if (o->speed_lags < 0 || o->speed_lags > 2)
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: speed_lags must be 0, 1 or 2");
+    if (o->tx_yaw < 0 || o->tx_yaw > 2) return sasnav_set_error(SASNAV_ERR_ARG, "navigate: tx_yaw must be 0, 1 or 2");
     if (o->reuse && (o->reuse->method != o->method || o->reuse->n_pings != run->n_pings ||
                      (!o->reuse->pairs && !o->reuse->packed)))
         return sasnav_set_error(SASNAV_ERR_ARG,
@@ -962,6 +964,52 @@ static int second_pass(nav_ctx *ctx)
     return rc;
 }
 
+/* Each transmitter's turn between transmission and reception from the
+ * consecutive pairs' first estimates (opts.tx_yaw without a gyro): the
+ * track's turn per metre, each ok pair's estimated yaw over its nominal
+ * step length, interpolated as the gyro's rates are
+ * (sasnav_tx_yaw_from_rates) with distance along the track for time and
+ * the distance travelled between transmission and reception (tx_lag;
+ * without it, speed x the two-way delay at the range of interest) for
+ * the interval. *used: the pairs that gave a rate (0: no turn known,
+ * tx_yaw untouched). */
+static int pairs_tx_yaw(const nav_ctx *ctx, int n_pairs, double *tx_yaw, int *used)
+{
+    const sasnav_run *run = ctx->run;
+    int n = run->n_pings;
+    *used = 0;
+    double range = run->range_of_interest > 0 ? run->range_of_interest : ctx->opts->pair.range;
+    double interval = run->tx_lag > 0 ? run->tx_lag : run->speed * 2.0 * range / run->sys.sound_speed;
+    if (!(interval > 0) || !isfinite(interval) || n < 2) return SASNAV_OK;
+    double *s = malloc(sizeof(double) * 2 * (size_t)n);
+    unsigned char *valid = calloc((size_t)n, 1);
+    if (!s || !valid) {
+        free(s);
+        free(valid);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    }
+    double *rate = s + n;
+    s[0] = rate[0] = 0.0;
+    for (int p = 1; p < n; p++) {
+        sasnav_pose d = sasnav_ping_displacement(&run->nav[p - 1], &run->nav[p]);
+        s[p] = s[p - 1] + hypot(d.x, d.y);
+        rate[p] = 0.0;
+    }
+    for (int j = 0; j < n_pairs; j++) {
+        sasnav_navigate_pair np;
+        get_pair(ctx, j, &np);
+        double len = np.q == np.p + 1 ? s[np.q] - s[np.p] : 0.0;
+        if (np.first_verdict != SASNAV_VERDICT_OK || !usable(&np) || !(len > 0)) continue;
+        rate[np.q] = np.result.displacement.theta / len;
+        valid[np.q] = isfinite(rate[np.q]) != 0;
+        *used += valid[np.q];
+    }
+    int rc = *used ? sasnav_tx_yaw_from_rates(n, s, rate, valid, interval, tx_yaw) : SASNAV_OK;
+    free(s);
+    free(valid);
+    return rc;
+}
+
 /* Centroids from the pair displacements: the chain, or the least squares
  * over all links when long baselines were estimated. */
 static int solve_centroids(const nav_ctx *ctx, sasnav_navigation *out, sasnav_pose first)
@@ -1066,7 +1114,7 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
         if (!ctx->lags) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
         speed_lags(ctx, 1, ctx->lags);
     }
-    if (run->channel_offset && run->aiding && run->aiding->yaw_rate && o->use_aiding &&
+    if (run->channel_offset && run->aiding && run->aiding->yaw_rate && o->use_aiding && o->tx_yaw == 1 &&
         o->method == SASNAV_METHOD_SUBSPACE) {
         ctx->tx_yaw = malloc(sizeof(double) * (size_t)n);
         if (!ctx->tx_yaw) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
@@ -1077,6 +1125,30 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
     out->gyro_tx_yaw = ctx->tx_yaw != NULL;
     int rc = estimate_all(ctx, out);
     if (rc || ctx->n_parts > 1 || ctx->keys) return rc; /* a part: first estimates only */
+    if (run->channel_offset && o->tx_yaw && !ctx->tx_yaw && o->method == SASNAV_METHOD_SUBSPACE && !o->reuse) {
+        /* No gyro: the turn between transmission and reception from the
+         * pairs' own yaw estimates, then the ok pairs again. */
+        for (int j = 0; j < out->n_pairs && !rc; j++) {
+            sasnav_navigate_pair np;
+            get_pair(ctx, j, &np);
+            np.first_verdict = np.result.verdict;
+            rc = put_pair(ctx, j, &np);
+        }
+        if (rc) return rc;
+        ctx->tx_yaw = malloc(sizeof(double) * (size_t)n);
+        if (!ctx->tx_yaw) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        int used = 0;
+        rc = pairs_tx_yaw(ctx, out->n_pairs, ctx->tx_yaw, &used);
+        if (rc) return rc;
+        if (used) {
+            rc = second_pass(ctx);
+            if (rc) return rc;
+            out->pairs_tx_yaw = 1;
+        } else {
+            free(ctx->tx_yaw);
+            ctx->tx_yaw = NULL;
+        }
+    }
     if (o->speed_lags == 2 && o->method == SASNAV_METHOD_SUBSPACE && !ctx->lags && !o->reuse &&
         !run->channel_offset) {
         for (int j = 0; j < out->n_pairs && !rc; j++) {

@@ -269,6 +269,12 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       extra cost; otherwise none), pairs (the DVL, or
                       without one the pairs' first surge estimates and a
                       second estimate of every pair: ~1.8x the time)
+    --tx-yaw M        channels with transmitters of their own: the yaw
+                      between transmission and reception that turns each
+                      transmitter: auto (default: from the gyro when the
+                      run has one, otherwise from the pairs' own yaw
+                      estimates and a second estimate of every ok pair),
+                      pairs (from the pairs even with a gyro), none
     --aiding-bias S,W,Y  estimate a constant error of the aiding per ping
                       interval (a DVL's bias and scale factor) with these
                       standard deviations (m, m, rad; default

@@ -381,6 +381,7 @@ class NavigateOpts(Structure):  # navigate.h
         ("nthreads", c_int),
         ("speed_lags", c_int),
         ("aiding_bias_sigma", Pose),
+        ("tx_yaw", c_int),
         ("reuse", c_void_p),  # const sasnav_navigation *
         ("done", POINTER(PairRecord)),
         ("n_done", c_int),
@@ -442,6 +443,7 @@ class NavigationC(Structure):  # navigate.h: struct sasnav_navigation
         ("threads_over_pairs", c_int),
         ("packed", c_void_p),
         ("gyro_tx_yaw", c_int),
+        ("pairs_tx_yaw", c_int),
     ]
 
 
