@@ -138,3 +138,14 @@ def test_two_transmitter_head(tmp_path, run_cli):
                        run.speed, run.tx_lag, run.range_of_interest)
     b = sasnav.image(plain, grid=grid, ping=0).data
     assert np.linalg.norm(a - b) > 0.1 * np.linalg.norm(a)
+    # navigation without a gyro: the transmitters' turn from the pairs'
+    # own yaw (the default), as `sasnav navigate` does; tx_yaw=0: none
+    small = dict(k=2, i=1, range_extent=0.6, threads=1)
+    nav = sasnav.navigate(run, **small)
+    assert nav.tx_yaw == "pairs"
+    out = tmp_path / "nav.h5"
+    cli = json.loads(run_cli("navigate", path, "--json", "--k", 2, "--i", 1, "--range-extent", 0.6,
+                             "--threads", 1, "-o", out).stdout)
+    assert cli["tx_yaw"] == "pairs"
+    assert nav.pairs[0].estimate.error.sway == pytest.approx(cli["pairs"][0]["sway"], rel=1e-9, abs=1e-12)
+    assert sasnav.navigate(run, tx_yaw=0, **small).tx_yaw == "none"

@@ -1073,6 +1073,9 @@ class Navigation:
     seconds_per_pair: float
     pairs_per_second: float
     threads_over_pairs: int
+    tx_yaw: str = "none"  # channels with transmitters of their own: where their turn
+    #                       between transmission and reception came from:
+    #                       "gyro", "pairs" (the pairs' own yaw) or "none"
 
     def placed(self, first_pose):
         """The estimated ping poses moved rigidly so that the first PCA
@@ -1122,7 +1125,8 @@ def _navigation_from_c(nv, truth):
         poses(nv.cumulative, POSE_DTYPE), poses(nv.differential, POSE_DTYPE),
         _pose(nv.rms_cumulative) if has_truth else None,
         _pose(nv.rms_differential) if has_truth else None,
-        nv.seconds, nv.seconds_per_pair, nv.pairs_per_second, nv.threads_over_pairs)
+        nv.seconds, nv.seconds_per_pair, nv.pairs_per_second, nv.threads_over_pairs,
+        "gyro" if nv.gyro_tx_yaw else "pairs" if nv.pairs_tx_yaw else "none")
 
 
 def _navigate_opts(pair, dpca, opts):
