@@ -294,6 +294,17 @@ int sasnav_run_tx_yaw(const sasnav_run *run, double range, double *tx_yaw);
 int sasnav_tx_yaw_from_rates(int n, const double *epoch, const double *rate, const unsigned char *valid,
                              double interval, double *tx_yaw);
 
+/* Without a gyro, the transmitters' turn between transmission and
+ * reception from an estimated displacement between two pings: the turn
+ * per metre of that displacement (theta / its length) times the distance
+ * travelled between transmission and reception (run->tx_lag; without it
+ * run->speed x 2 range / c), the same for every ping (tx_yaw[n_pings]).
+ * What `sasnav pair` uses on a run with channel offsets and no gyro; a
+ * navigation interpolates the turn along the track instead (opts.tx_yaw).
+ * Errors: NULL, no such distance, a zero or non-finite displacement. */
+int sasnav_run_tx_yaw_from_estimate(const sasnav_run *run, sasnav_pose displacement, double range,
+                                    double *tx_yaw);
+
 /* Evaluates zeta and eta at a hypothesised MOTION ERROR (displacement =
  * nominal + error). level 0: coarse pixels, coarse (k, i); level 1: full
  * pixels, coarse (k, i); level 2: full pixels, final (k, i). blurred != 0
@@ -326,6 +337,12 @@ typedef struct {
     double tx_lag;               /* EPCA Tx-array offset used there, m */
     int status;                  /* SASNAV_OK or the code that stopped it */
     sasnav_pair_result result;   /* valid when status is SASNAV_OK */
+    int tx_yaw_from_estimate;    /* 1: a run with channel offsets and no
+                                    gyro whose "ok" first estimate gave the
+                                    transmitters' turn
+                                    (sasnav_run_tx_yaw_from_estimate), and
+                                    result is the "ok" estimate made again
+                                    with it */
 } sasnav_pair_interval;
 
 /* Estimates the motion error of ping q relative to ping p of `run` in n
@@ -338,7 +355,10 @@ typedef struct {
  * run->speed > 0). A run with channel offsets uses its channels' layouts
  * instead of the EPCA model (sasnav_pair_set_data_run; the Tx-array offset
  * is the navigation's, motion_lag does not apply), with the gyro's
- * transmitter yaw when the run has one. The nominal displacement comes
+ * transmitter yaw when the run has one; without a gyro an "ok" estimate
+ * gives the transmitters' turn (sasnav_run_tx_yaw_from_estimate) and is
+ * made again from itself with it (kept when that is "ok" too:
+ * out[s].tx_yaw_from_estimate). The nominal displacement comes
  * from run->nav. Returns
  * SASNAV_OK when every interval was attempted (each interval's own status
  * in out[s].status), SASNAV_ERR_ARG for bad arguments (pings, n outside

@@ -491,6 +491,22 @@ int sasnav_tx_yaw_from_rates(int n, const double *epoch, const double *rate, con
     return SASNAV_OK;
 }
 
+int sasnav_run_tx_yaw_from_estimate(const sasnav_run *run, sasnav_pose displacement, double range,
+                                    double *tx_yaw)
+{
+    if (!run || !tx_yaw) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    double interval = run->tx_lag > 0 ? run->tx_lag : run->speed * 2.0 * range / run->sys.sound_speed;
+    double len = hypot(displacement.x, displacement.y);
+    if (!(interval > 0) || !isfinite(interval) || !(len > 0) || !isfinite(displacement.theta))
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "transmitter yaw: no distance between transmission and reception (tx_lag %g m, "
+                                "speed %g m/s) or no step (%g m)",
+                                run->tx_lag, run->speed, len);
+    double yaw = -interval * displacement.theta / len;
+    for (int p = 0; p < run->n_pings; p++) tx_yaw[p] = yaw;
+    return SASNAV_OK;
+}
+
 int sasnav_run_tx_yaw(const sasnav_run *run, double range, double *tx_yaw)
 {
     if (!run || !tx_yaw) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
@@ -938,6 +954,24 @@ int sasnav_pair_estimate_intervals(const sasnav_run *run, int p, int q,
             rc = sasnav_pair_set_data_run(pair, run, p, q, sasnav_run_ping(run, p), sasnav_run_ping(run, q),
                                           nominal, tx_yaw);
         if (!rc) rc = sasnav_pair_estimate(pair, &out[s].result);
+        if (!rc && run->channel_offset && !tx_yaw && out[s].result.verdict == SASNAV_VERDICT_OK) {
+            /* No gyro: the transmitters' turn from this estimate, and the
+             * estimate again from it (as navigate does). */
+            double *yaw = malloc(sizeof *yaw * (size_t)run->n_pings);
+            sasnav_pair_result again;
+            int r2 = yaw ? sasnav_run_tx_yaw_from_estimate(run, out[s].result.displacement, so.range, yaw)
+                         : sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+            if (!r2)
+                r2 = sasnav_pair_set_data_run(pair, run, p, q, sasnav_run_ping(run, p), sasnav_run_ping(run, q),
+                                              nominal, yaw);
+            if (!r2) r2 = sasnav_pair_estimate_from(pair, out[s].result.error, &again);
+            free(yaw);
+            if (r2 == SASNAV_ERR_NOMEM || r2 == SASNAV_ERR_FFT || r2 == SASNAV_ERR_INTERNAL) rc = r2;
+            else if (!r2 && again.verdict == SASNAV_VERDICT_OK) {
+                out[s].result = again;
+                out[s].tx_yaw_from_estimate = 1;
+            }
+        }
         sasnav_pair_destroy(pair);
         out[s].status = rc;
         if (rc == SASNAV_ERR_NOMEM || rc == SASNAV_ERR_FFT || rc == SASNAV_ERR_INTERNAL) {

@@ -981,6 +981,7 @@ def estimate_pair(run, p=0, q=1, *, prior_start=None, lags=None, **opts):
         check(L.sasnav_pair_create(ctypes.byref(sys_c), ctypes.byref(arr_c), ctypes.byref(win),
                                    ctypes.byref(po), ctypes.byref(pair)))
         dp, dq = raw[p].ctypes.data, raw[q].ctypes.data
+        yaw = None
         if run.channel_offset is not None:
             # channels with transmitters of their own: their layouts (and the
             # gyro's transmitter yaw), as `sasnav pair` / navigate
@@ -988,7 +989,6 @@ def estimate_pair(run, p=0, q=1, *, prior_start=None, lags=None, **opts):
                 raise ValueError("lags do not apply to a run with channel offsets (its layouts give them)")
             with _c_run(run) as r:
                 rc = r.contents
-                yaw = None
                 if rc.aiding and rc.aiding.contents.yaw_rate:
                     yaw = np.zeros(n)
                     check(L.sasnav_run_tx_yaw(r, po.range, yaw.ctypes.data_as(ctypes.POINTER(ctypes.c_double))))
@@ -1005,6 +1005,19 @@ def estimate_pair(run, p=0, q=1, *, prior_start=None, lags=None, **opts):
         else:
             check(L.sasnav_pair_estimate_from(pair, _cpose(prior_start, "prior_start"),
                                               ctypes.byref(res)))
+        if run.channel_offset is not None and yaw is None and res.verdict == 0:
+            # no gyro: the transmitters' turn from this "ok" estimate, and
+            # the estimate again from it (as `sasnav pair`)
+            again = C.PairResult()
+            dptr = ctypes.POINTER(ctypes.c_double)
+            yaw2 = np.zeros(n)
+            with _c_run(run) as r:
+                if L.sasnav_run_tx_yaw_from_estimate(r, res.displacement, ctypes.c_double(po.range),
+                                                     yaw2.ctypes.data_as(dptr)) == 0:
+                    check(L.sasnav_pair_set_data_run(pair, r, p, q, dp, dq, nominal, yaw2.ctypes.data_as(dptr)))
+                    check(L.sasnav_pair_estimate_from(pair, res.error, ctypes.byref(again)))
+                    if again.verdict == 0:
+                        res = again
     finally:
         L.sasnav_pair_destroy(pair)
     return _estimate_from_c(res, p, q, _pose(nominal), truth)
