@@ -50,6 +50,7 @@ typedef struct {
     double range, tx_lag;
     sasnav_pair_result res;
     int rc;
+    int tx_yaw_from_estimate;
 } interval_result;
 
 static json_t *pose_json(sasnav_pose e)
@@ -190,6 +191,7 @@ int cmd_pair(int argc, char **argv)
         out[s].tx_lag = iv[s].tx_lag;
         out[s].res = iv[s].result;
         out[s].rc = iv[s].status;
+        out[s].tx_yaw_from_estimate = iv[s].tx_yaw_from_estimate;
         if (iv[s].status) {
             failed = 1;
             cli_fail("pair", 0, "pings %ld-%ld, range %.2f m: %s", p, q, iv[s].range,
@@ -198,6 +200,11 @@ int cmd_pair(int argc, char **argv)
         }
     }
     free(iv);
+    /* channels with transmitters of their own: where their turn came from */
+    const char *tx_yaw = !run->channel_offset                      ? NULL
+                         : run->aiding && run->aiding->yaw_rate    ? "gyro"
+                         : out[0].tx_yaw_from_estimate             ? "estimate"
+                                                                   : "none";
     sasnav_run_free(run);
     if (failed && !json) {
         free(out);
@@ -240,6 +247,7 @@ int cmd_pair(int argc, char **argv)
                       "final", "seconds", r0->seconds_final, "applications",
                       (json_int_t)r0->applications_final));
         json_object_set_new(root, "seconds", json_real(r0->seconds));
+        if (tx_yaw) json_object_set_new(root, "tx_yaw", json_string(tx_yaw));
         const char *st = out[0].rc ? sasnav_strerror(out[0].rc)
                          : r0->status == SASNAV_OK ? "converged" : sasnav_strerror(r0->status);
         json_object_set_new(root, "status", json_string(st));

@@ -84,6 +84,8 @@ else
     cat "$T/nav0.err" >&2
     fail "navigate --tx-yaw none"
 fi
+"$CLI" pair "$T/run.h5" --k 2 --i 1 --json > "$T/pair.json" 2> /dev/null || fail "pair"
+grep -q '"tx_yaw": "estimate"' "$T/pair.json" || fail "pair JSON lacks tx_yaw estimate (no gyro)"
 "$CLI" navigate "$T/run.h5" --tx-yaw sideways -o "$T/bad.h5" 2> /dev/null
 [ $? -eq 2 ] || fail "--tx-yaw sideways: status other than 2"
 [ -e "$T/bad.h5" ] && fail "--tx-yaw sideways wrote a file"

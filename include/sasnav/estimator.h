@@ -294,6 +294,12 @@ int sasnav_run_tx_yaw(const sasnav_run *run, double range, double *tx_yaw);
 int sasnav_tx_yaw_from_rates(int n, const double *epoch, const double *rate, const unsigned char *valid,
                              double interval, double *tx_yaw);
 
+/* A second estimate made from a first one (sasnav_pair_estimate_from):
+ * `again` takes the first's candidates, choice, ambiguity and margin (the
+ * global stage is the first's), and its time, applications and
+ * evaluations become the sum of both. */
+void sasnav_pair_result_carry(const sasnav_pair_result *first, sasnav_pair_result *again);
+
 /* Without a gyro, the transmitters' turn between transmission and
  * reception from an estimated displacement between two pings: the turn
  * per metre of that displacement (theta / its length) times the distance

@@ -491,6 +491,19 @@ int sasnav_tx_yaw_from_rates(int n, const double *epoch, const double *rate, con
     return SASNAV_OK;
 }
 
+void sasnav_pair_result_carry(const sasnav_pair_result *first, sasnav_pair_result *again)
+{
+    if (!first || !again) return;
+    again->n_candidates = first->n_candidates;
+    memcpy(again->candidates, first->candidates, sizeof again->candidates);
+    again->chosen = first->chosen;
+    again->ambiguity = first->ambiguity;
+    again->margin = first->margin;
+    again->seconds += first->seconds;
+    again->applications += first->applications;
+    again->evaluations += first->evaluations;
+}
+
 int sasnav_run_tx_yaw_from_estimate(const sasnav_run *run, sasnav_pose displacement, double range,
                                     double *tx_yaw)
 {
@@ -968,6 +981,7 @@ int sasnav_pair_estimate_intervals(const sasnav_run *run, int p, int q,
             free(yaw);
             if (r2 == SASNAV_ERR_NOMEM || r2 == SASNAV_ERR_FFT || r2 == SASNAV_ERR_INTERNAL) rc = r2;
             else if (!r2 && again.verdict == SASNAV_VERDICT_OK) {
+                sasnav_pair_result_carry(&out[s].result, &again);
                 out[s].result = again;
                 out[s].tx_yaw_from_estimate = 1;
             }

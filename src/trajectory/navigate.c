@@ -592,15 +592,7 @@ static int agrees(const nav_ctx *ctx, sasnav_pose u, sasnav_pose v, sasnav_pose 
  * offered), time and cost added. */
 static void adopt_estimate(sasnav_navigate_pair *np, sasnav_pair_result *r)
 {
-    const sasnav_pair_result *old = &np->result;
-    r->n_candidates = old->n_candidates;
-    memcpy(r->candidates, old->candidates, sizeof r->candidates);
-    r->chosen = old->chosen;
-    r->ambiguity = old->ambiguity;
-    r->margin = old->margin;
-    r->seconds += old->seconds;
-    r->applications += old->applications;
-    r->evaluations += old->evaluations;
+    sasnav_pair_result_carry(&np->result, r);
     np->result = *r;
 }
 

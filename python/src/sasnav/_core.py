@@ -1017,6 +1017,7 @@ def estimate_pair(run, p=0, q=1, *, prior_start=None, lags=None, **opts):
                     check(L.sasnav_pair_set_data_run(pair, r, p, q, dp, dq, nominal, yaw2.ctypes.data_as(dptr)))
                     check(L.sasnav_pair_estimate_from(pair, res.error, ctypes.byref(again)))
                     if again.verdict == 0:
+                        L.sasnav_pair_result_carry(ctypes.byref(res), ctypes.byref(again))
                         res = again
     finally:
         L.sasnav_pair_destroy(pair)
