@@ -16,7 +16,7 @@
  *
  * usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE]
  *                    [--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows]
- *                    [--fused-lags] [--sub-lags]
+ *                    [--fused-lags] [--sub-lags] [--methods M1,M2,...]
  *
  * Seeds follow `sasnav simulate --seed S --aiding` (scene 3S+1, trajectory
  * 3S+2, noise 3S+3, aiding 3S+4). Prints one line per run and method, then
@@ -34,7 +34,9 @@
  * offsets (docs/estimator.md): sub+lags (the pairs' own surge, opts.speed_lags
  * = 2, no aiding) and fused+lags (the DVL's speed, opts.speed_lags = 1, fused
  * with the aiding-bias term: fused+bias with the offsets); --fused-lags adds
- * fused+lags only, --sub-lags sub+lags only. */
+ * fused+lags only, --sub-lags sub+lags only. --methods runs only the
+ * named rows (e.g. `--methods fused+lags,aiding`: the default fusion and
+ * dead reckoning, half the time of all rows). */
 #include "sasnav/error.h"
 #include "sasnav/navigate.h"
 #include "sasnav/sim.h"
@@ -97,11 +99,27 @@ int main(int argc, char **argv)
             use[M_FUSED_LAGS] = 1;
         } else if (!strcmp(argv[a], "--sub-lags")) {
             use[M_SUB_LAGS] = 1;
+        } else if (!strcmp(argv[a], "--methods") && a + 1 < argc) {
+            /* only these rows (comma-separated names); rows that reuse
+             * subspace's estimates (paper, fused, fused+bias) add it */
+            char *list = argv[++a];
+            memset(use, 0, sizeof use);
+            for (char *tok = strtok(list, ","); tok; tok = strtok(NULL, ",")) {
+                int found = 0;
+                for (int m = 0; m < N_METHODS; m++)
+                    if (!strcmp(tok, names[m])) use[m] = found = 1;
+                if (!found) {
+                    fprintf(stderr, "bench_trust: unknown method %s\n", tok);
+                    return 2;
+                }
+            }
+            if (use[M_PAPER] || use[M_FUSED] || use[M_FUSED_BIAS]) use[M_SUB] = 1;
         } else if (!strcmp(argv[a], "--pairs") && a + 1 < argc) {
             pairs_path = argv[++a];
         } else {
             fprintf(stderr, "usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE] "
-                            "[--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows] [--fused-lags] [--sub-lags]\n");
+                            "[--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows] [--fused-lags] [--sub-lags] "
+                            "[--methods M1,M2,...]\n");
             return 2;
         }
     }
@@ -194,7 +212,7 @@ int main(int argc, char **argv)
             printf("%6ld %-10s %6d %9d %8d %+14.4f %+14.3f %+12.3e %10.2f\n", s, names[m], slips,
                    unflagged, flagged, 1e3 * f.y, 1e3 * f.x, f.theta, nv->seconds_per_pair);
         }
-        if (pf) {
+        if (pf && use[M_SUB]) {
             const sasnav_navigation *nv = &nav[M_SUB];
             for (int j = 0; j < nv->n_pairs; j++) {
                 const sasnav_navigate_pair *np = &nv->pairs[j];
