@@ -177,24 +177,35 @@ static void test_focus(sasnav_run *run, double tx_, double ty_)
     free(fb);
 }
 
-static void test_navigate(void)
+/* A noise-free 4-ping paper-trajectory run of the two-transmitter head
+ * (true_bistatic: the simulator's Tx poses; motion_rms > 0: the smooth
+ * motion errors' rms, else the preset's), and quick navigation options
+ * (the coarse k and i, a 0.6 m grid as test_navigate: cost / 2.7, same
+ * texture). NULL on failure (counted). */
+static sasnav_run *navigable_run(int true_bistatic, double motion_rms, sasnav_navigate_opts *o)
 {
     sasnav_scenario sc;
     CHECK_OK(sasnav_scenario_preset("paper-trajectory", &sc));
     two_tx_head(&sc);
     sc.traj.n_pings = 4;
     sc.traj.x_start = -0.3;
-    sc.traj.true_bistatic = 0;
-    sc.traj.surge_rms = sc.traj.sway_rms = sc.traj.yaw_rms = 3e-3;
+    sc.traj.true_bistatic = true_bistatic;
+    if (motion_rms > 0) sc.traj.surge_rms = sc.traj.sway_rms = sc.traj.yaw_rms = motion_rms;
     sc.snr_db = INFINITY;
     sasnav_run *run = NULL;
     CHECK_OK(sasnav_simulate(&sc, NULL, NULL, &run));
-    if (!run) return;
+    sasnav_navigate_default_opts(o);
+    o->pair.k = o->pair.coarse_k;
+    o->pair.i = o->pair.coarse_i;
+    o->pair.range_extent = 0.6;
+    return run;
+}
+
+static void test_navigate(void)
+{
     sasnav_navigate_opts o;
-    sasnav_navigate_default_opts(&o);
-    o.pair.k = o.pair.coarse_k;
-    o.pair.i = o.pair.coarse_i;
-    o.pair.range_extent = 0.6; /* as test_navigate: cost / 2.7, same texture */
+    sasnav_run *run = navigable_run(0, 3e-3, &o);
+    if (!run) return;
     o.tx_yaw = 0; /* the run's transmitters keep the array's heading (true_bistatic = 0) */
     sasnav_navigation nav;
     CHECK_OK(sasnav_navigate(run, &o, &nav));
@@ -272,21 +283,9 @@ static void test_tx_yaw_rates(void)
  * tx_yaw = 0 (each transmitter with the array's heading). */
 static void test_navigate_tx_yaw(void)
 {
-    sasnav_scenario sc;
-    CHECK_OK(sasnav_scenario_preset("paper-trajectory", &sc));
-    two_tx_head(&sc);
-    sc.traj.n_pings = 4;
-    sc.traj.x_start = -0.3;
-    sc.traj.true_bistatic = 1;
-    sc.snr_db = INFINITY;
-    sasnav_run *run = NULL;
-    CHECK_OK(sasnav_simulate(&sc, NULL, NULL, &run));
-    if (!run) return;
     sasnav_navigate_opts o;
-    sasnav_navigate_default_opts(&o);
-    o.pair.k = o.pair.coarse_k;
-    o.pair.i = o.pair.coarse_i;
-    o.pair.range_extent = 0.6;
+    sasnav_run *run = navigable_run(1, 0, &o);
+    if (!run) return;
     double rms[2] = {0, 0}, worst[2] = {0, 0};
     int from_pairs[2] = {-1, -1};
     for (int v = 0; v < 2; v++) {

@@ -1090,6 +1090,20 @@ static int compare_with_truth(const nav_ctx *ctx, sasnav_navigation *out)
     return SASNAV_OK;
 }
 
+/* Before a second pass: each pair's first verdict is its present one
+ * (second_pass re-estimates the pairs whose first verdict is ok). */
+static int keep_first_verdicts(nav_ctx *ctx, int n_pairs)
+{
+    int rc = SASNAV_OK;
+    for (int j = 0; j < n_pairs && !rc; j++) {
+        sasnav_navigate_pair np;
+        get_pair(ctx, j, &np);
+        np.first_verdict = np.result.verdict;
+        rc = put_pair(ctx, j, &np);
+    }
+    return rc;
+}
+
 static int navigate(nav_ctx *ctx, sasnav_navigation *out)
 {
     const sasnav_run *run = ctx->run;
@@ -1120,12 +1134,7 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
     if (run->channel_offset && o->tx_yaw && !ctx->tx_yaw && o->method == SASNAV_METHOD_SUBSPACE && !o->reuse) {
         /* No gyro: the turn between transmission and reception from the
          * pairs' own yaw estimates, then the ok pairs again. */
-        for (int j = 0; j < out->n_pairs && !rc; j++) {
-            sasnav_navigate_pair np;
-            get_pair(ctx, j, &np);
-            np.first_verdict = np.result.verdict;
-            rc = put_pair(ctx, j, &np);
-        }
+        rc = keep_first_verdicts(ctx, out->n_pairs);
         if (rc) return rc;
         ctx->tx_yaw = malloc(sizeof(double) * (size_t)n);
         if (!ctx->tx_yaw) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
@@ -1143,12 +1152,7 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
     }
     if (o->speed_lags == 2 && o->method == SASNAV_METHOD_SUBSPACE && !ctx->lags && !o->reuse &&
         !run->channel_offset) {
-        for (int j = 0; j < out->n_pairs && !rc; j++) {
-            sasnav_navigate_pair np;
-            get_pair(ctx, j, &np);
-            np.first_verdict = np.result.verdict;
-            rc = put_pair(ctx, j, &np);
-        }
+        rc = keep_first_verdicts(ctx, out->n_pairs);
         if (rc) return rc;
         ctx->lags = malloc(sizeof(double) * (size_t)n);
         if (!ctx->lags) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
