@@ -274,6 +274,35 @@ static void test_tx_yaw_rates(void)
     CHECK(sasnav_tx_yaw_from_rates(N, epoch, rate, valid, -1.0, tx) == SASNAV_ERR_ARG, "negative interval");
     CHECK(sasnav_tx_yaw_from_rates(N, epoch, rate, valid, NAN, tx) == SASNAV_ERR_ARG, "NaN interval");
     CHECK(sasnav_tx_yaw_from_rates(N, epoch, NULL, valid, interval, tx) == SASNAV_ERR_ARG, "NULL rates");
+    double back[N];
+    memcpy(back, epoch, sizeof back);
+    back[4] = back[3]; /* not strictly increasing */
+    CHECK(sasnav_tx_yaw_from_rates(N, back, rate, valid, interval, tx) == SASNAV_ERR_ARG, "repeated epoch");
+    rate[5] = NAN;
+    CHECK(sasnav_tx_yaw_from_rates(N, epoch, rate, valid, interval, tx) == SASNAV_ERR_ARG, "NaN rate");
+    valid[5] = 0; /* a NaN where no rate is claimed is fine */
+    CHECK_OK(sasnav_tx_yaw_from_rates(N, epoch, rate, valid, interval, tx));
+}
+
+/* sasnav_run_tx_yaw_from_estimate: the turn per metre of the displacement
+ * times the distance between transmission and reception (tx_lag), the
+ * same for every ping (analytic; rounding only). */
+static void test_tx_yaw_estimate(sasnav_run *run)
+{
+    double *tx = malloc(sizeof *tx * (size_t)run->n_pings);
+    if (!tx) return;
+    double lag = run->tx_lag;
+    run->tx_lag = 0.1;
+    sasnav_pose d = {0.12, 0.16, 0.01}; /* 0.2 m long */
+    CHECK_OK(sasnav_run_tx_yaw_from_estimate(run, d, 10.0, tx));
+    for (int p = 0; p < run->n_pings; p++)
+        CHECK(fabs(tx[p] + 0.1 * 0.01 / 0.2) <= 1e-15, "ping %d: turn %.17g, expected -0.005", p, tx[p]);
+    CHECK(sasnav_run_tx_yaw_from_estimate(run, (sasnav_pose){0, 0, 0.01}, 10.0, tx) == SASNAV_ERR_ARG,
+          "a zero displacement accepted");
+    d.theta = NAN;
+    CHECK(sasnav_run_tx_yaw_from_estimate(run, d, 10.0, tx) == SASNAV_ERR_ARG, "a NaN yaw accepted");
+    run->tx_lag = lag;
+    free(tx);
 }
 
 /* A two-transmitter run whose transmitters turn with the vehicle between
@@ -327,6 +356,7 @@ int main(void)
         double x = 0.013, y = 10.007; /* the "point" preset's target */
         test_echo_phase(run, x, y);
         test_focus(run, x, y);
+        test_tx_yaw_estimate(run);
         sasnav_run_free(run);
     }
     test_navigate();

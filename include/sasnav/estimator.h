@@ -290,7 +290,8 @@ int sasnav_run_tx_yaw(const sasnav_run *run, double range, double *tx_yaw);
  * tx_yaw[p] = -interval x the rate at epoch[p] - interval / 2. What
  * sasnav_navigate uses without a gyro, with the rates from its own first
  * estimates (yaw per metre of track). Errors: NULL arguments, n < 1, an
- * interval that is not finite and >= 0. */
+ * interval that is not finite and >= 0, epochs not finite and strictly
+ * increasing, a valid rate that is not finite. */
 int sasnav_tx_yaw_from_rates(int n, const double *epoch, const double *rate, const unsigned char *valid,
                              double interval, double *tx_yaw);
 

@@ -470,6 +470,13 @@ int sasnav_tx_yaw_from_rates(int n, const double *epoch, const double *rate, con
     if (!(interval >= 0) || !isfinite(interval))
         return sasnav_set_error(SASNAV_ERR_ARG, "transmitter yaw: interval %g must be finite and >= 0", interval);
     for (int p = 0; p < n; p++) {
+        if (!isfinite(epoch[p]) || (p > 0 && !(epoch[p] > epoch[p - 1])))
+            return sasnav_set_error(SASNAV_ERR_ARG, "transmitter yaw: epochs must be finite and strictly increasing "
+                                                    "(entry %d)", p);
+        if (p > 0 && valid[p] && !isfinite(rate[p]))
+            return sasnav_set_error(SASNAV_ERR_ARG, "transmitter yaw: rate %d is not finite", p);
+    }
+    for (int p = 0; p < n; p++) {
         /* The heading of ping p is the array's at reception (epoch[p]); the
          * turn between transmission and reception is the rate at their
          * midpoint, interval / 2 before it: interpolated linearly between
