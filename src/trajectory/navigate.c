@@ -909,11 +909,16 @@ static void speed_lags(const nav_ctx *ctx, int from_dvl, double *lags)
     }
 }
 
-/* The second pass of opts.speed_lags = 2: every consecutive pair whose
- * first estimate is ok is estimated again from it with the per-ping
- * offsets (local stages only); its candidates and margin stay the first
- * pass's. Concurrent over pairs like the first pass. */
-static int second_pass(nav_ctx *ctx)
+/* The second pass of opts.speed_lags = 2 and of the transmitters' turn
+ * from the pairs: every consecutive pair whose first estimate is ok is
+ * estimated again from it with the new layouts or offsets (local stages
+ * only); its candidates and margin stay the first pass's. With
+ * retry_flagged, a consecutive pair whose first estimate was not ok
+ * (other than for want of overlap) is estimated afresh (all stages) with
+ * them, and the new estimate replaces it when it is ok: for the turn,
+ * whose absence can itself make a pair ambiguous. Concurrent over pairs
+ * like the first pass. */
+static int second_pass(nav_ctx *ctx, int retry_flagged)
 {
     int n = ctx->run->n_pings - 1, stop = 0;
     int *codes = calloc((size_t)(n > 0 ? n : 1), sizeof(int));
@@ -925,12 +930,15 @@ static int second_pass(nav_ctx *ctx)
         skip = stop;
         sasnav_navigate_pair pair, *np = &pair;
         get_pair(ctx, j, np);
-        if (skip || np->first_verdict != SASNAV_VERDICT_OK || !usable(np)) continue;
+        int again = np->first_verdict == SASNAV_VERDICT_OK && usable(np);
+        int afresh = !again && retry_flagged && np->q == np->p + 1 && np->status != SASNAV_ERR_NO_OVERLAP &&
+                     np->first_verdict != SASNAV_VERDICT_NO_OVERLAP;
+        if (skip || (!again && !afresh)) continue;
         int t = ctx->n_workers > 1 ? omp_get_thread_num() : 0;
         sasnav_pair *est = ctx->estimators[t];
         sasnav_pair_result r;
         int rc = set_pair_data(ctx, t, est, np->p, np->q, np->nominal);
-        if (!rc) rc = sasnav_pair_estimate_from(est, np->result.error, &r);
+        if (!rc) rc = again ? sasnav_pair_estimate_from(est, np->result.error, &r) : sasnav_pair_estimate(est, &r);
         if (fatal_code(rc)) {
             codes[j] = rc;
 #pragma omp atomic write
@@ -938,7 +946,15 @@ static int second_pass(nav_ctx *ctx)
             continue;
         }
         if (rc || r.verdict != SASNAV_VERDICT_OK) continue; /* keep the first estimate */
-        adopt_estimate(np, &r);
+        if (again) {
+            adopt_estimate(np, &r);
+        } else { /* its own candidates; the time and work of both */
+            r.seconds += np->result.seconds;
+            r.applications += np->result.applications;
+            r.evaluations += np->result.evaluations;
+            np->result = r;
+            np->first_verdict = r.verdict;
+        }
         np->status = r.status;
         np->first_result = r;
         np->first_status = r.status;
@@ -1142,7 +1158,7 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
         rc = pairs_tx_yaw(ctx, out->n_pairs, ctx->tx_yaw, &used);
         if (rc) return rc;
         if (used) {
-            rc = second_pass(ctx);
+            rc = second_pass(ctx, 1);
             if (rc) return rc;
             out->pairs_tx_yaw = 1;
         } else {
@@ -1157,7 +1173,7 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
         ctx->lags = malloc(sizeof(double) * (size_t)n);
         if (!ctx->lags) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
         speed_lags(ctx, 0, ctx->lags);
-        rc = second_pass(ctx);
+        rc = second_pass(ctx, 0);
         if (rc) return rc;
     }
     rc = resolve_pairs(ctx, out);
