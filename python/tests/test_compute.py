@@ -148,4 +148,4 @@ def test_two_transmitter_head(tmp_path, run_cli):
                              "--threads", 1, "-o", out).stdout)
     assert cli["tx_yaw"] == "pairs"
     assert nav.pairs[0].estimate.error.sway == pytest.approx(cli["pairs"][0]["sway"], rel=1e-9, abs=1e-12)
-    assert sasnav.navigate(run, tx_yaw=0, **small).tx_yaw == "none"
+    assert sasnav.navigate(run, tx_yaw="none", **small).tx_yaw == "none"

@@ -806,7 +806,8 @@ _NORMS = {"max": 0, "p": 1, "q": 2, "none": 3}
 _METHODS = {"subspace": 0, "dpca": 1, "aiding": 2}
 _METHOD_NAMES = {v: k for k, v in _METHODS.items()}
 _SPEED_LAGS = {"none": 0, "dvl": 1, "pairs": 2}
-_ENUMS = {"norm": _NORMS, "method": _METHODS, "speed_lags": _SPEED_LAGS}
+_TX_YAW = {"none": 0, "auto": 1, "pairs": 2}
+_ENUMS = {"norm": _NORMS, "method": _METHODS, "speed_lags": _SPEED_LAGS, "tx_yaw": _TX_YAW}
 # compact_pairs: the Python navigation reads `pairs` directly (packed pairs
 # save memory on long runs, where open_run's navigate_part serves).
 _NOT_SETTABLE = {"reuse", "progress", "progress_user", "compact_pairs", "done", "n_done"}
@@ -1235,7 +1236,8 @@ def navigate(run, *, pair=None, dpca=None, progress=None, done=None, **opts):
     ("subspace", "dpca", "aiding"), long_baselines, align, resolve,
     use_aiding, motion_sigma=(s, w, y), link_sigma, long_sigma, eta_weight,
     aiding_gate, speed_lags ("none", "dvl" (default), "pairs"), aiding_bias_sigma,
-    threads (= nthreads); any other keyword that names a field of
+    tx_yaw ("auto" (default), "pairs", "none": a multi-transmitter head's
+    turn between transmission and reception, as `--tx-yaw`), threads (= nthreads); any other keyword that names a field of
     sasnav_pair_opts (k, i, yaw_sigma, fix_yaw, ...) goes to the subspace
     estimator, as do the entries of the dict `pair`; `dpca` is a dict of
     sasnav_dpca_opts fields. progress(done, total, p, q, seconds) is called
