@@ -1,5 +1,6 @@
 """Simulation, pair estimates, navigation and imaging through the binding."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -149,3 +150,7 @@ def test_two_transmitter_head(tmp_path, run_cli):
     assert cli["tx_yaw"] == "pairs"
     assert nav.pairs[0].estimate.error.sway == pytest.approx(cli["pairs"][0]["sway"], rel=1e-9, abs=1e-12)
     assert sasnav.navigate(run, tx_yaw="none", **small).tx_yaw == "none"
+    # both pings at one place: no distance to take a turn per metre over;
+    # navigated without one, not refused
+    same = dataclasses.replace(run, nav=np.repeat(run.nav[:1], 2))
+    assert sasnav.navigate(same, **small).tx_yaw == "none"

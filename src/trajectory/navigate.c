@@ -980,7 +980,7 @@ static int second_pass(nav_ctx *ctx, int retry_flagged)
  * the distance travelled between transmission and reception (tx_lag;
  * without it, speed x the two-way delay at the range of interest) for
  * the interval. *used: the pairs that gave a rate (0: no turn known,
- * tx_yaw untouched). */
+ * tx_yaw untouched; also where two pings' nominal poses coincide). */
 static int pairs_tx_yaw(const nav_ctx *ctx, int n_pairs, double *tx_yaw, int *used)
 {
     const sasnav_run *run = ctx->run;
@@ -1012,6 +1012,8 @@ static int pairs_tx_yaw(const nav_ctx *ctx, int n_pairs, double *tx_yaw, int *us
         valid[np.q] = isfinite(rate[np.q]) != 0;
         *used += valid[np.q];
     }
+    for (int p = 1; p < n && *used; p++)
+        if (!(s[p] > s[p - 1])) *used = 0; /* pings at one place: no distance to interpolate on */
     int rc = *used ? sasnav_tx_yaw_from_rates(n, s, rate, valid, interval, tx_yaw) : SASNAV_OK;
     free(s);
     free(valid);
