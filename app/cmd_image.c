@@ -53,7 +53,8 @@ static int default_grid(const sasnav_run *run, const sasnav_ping_pose *nav, sasn
         if (c.x > xmax) xmax = c.x;
     }
     double res = run->sys.sound_speed / (4.0 * run->sys.bandwidth);
-    if (run->array.rx_length > 0 && run->array.rx_length / 4.0 < res) res = run->array.rx_length / 4.0;
+    double d_rx = sasnav_array_min_rx_length(&run->array);
+    if (d_rx > 0 && d_rx / 4.0 < res) res = d_rx / 4.0;
     double r0 = run->range_of_interest > 0 ? run->range_of_interest : 10.0;
     xmin -= 0.5;
     xmax += 0.5;

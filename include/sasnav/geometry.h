@@ -33,11 +33,27 @@ void sasnav_pose_apply(sasnav_pose a, double px, double py, double *wx, double *
 /* Wraps an angle to (-pi, pi]. */
 double sasnav_wrap_angle(double theta);
 
+/* The apertures and heights of one channel's transmitter and receiver. */
+typedef struct {
+    double rx_length;           /* m, receiver aperture D_r (0 = omnidirectional) */
+    double tx_length;           /* m, transmitter aperture D_t (0 = omnidirectional) */
+    double rx_height;           /* m above the scene plane */
+    double tx_height;           /* m above the scene plane */
+} sasnav_channel_size;
+
 /* The sensor head: N receivers along the array axis and one transmitter.
  * rx_u[l] is the along-array coordinate of receiver l relative to the array
  * midpoint (SPEC 1: (l - (N-1)/2) * spacing for a uniform array).
  * Heights are above the scene plane (3-D geometries, e.g. in-air rigs);
- * motion stays in the plane. */
+ * motion stays in the plane.
+ *
+ * Channels of their own sizes (docs/model.md, "Channel layouts"): with
+ * per_channel = 1, channel l's apertures and heights are size[l] (a head
+ * whose receivers sit at several heights, e.g. AirSAS's two microphones, or
+ * transmitters of several lengths) and the four array-wide values are not
+ * used by the operators (sasnav_array_set_sizes keeps them as the channels'
+ * largest lengths and mean heights, for the summaries that want one value).
+ * per_channel = 0 (every array built before) is the one-size head. */
 typedef struct {
     int n_rx;
     double rx_u[SASNAV_MAX_RX]; /* m, along the array axis */
@@ -45,7 +61,29 @@ typedef struct {
     double tx_length;           /* m, transmitter aperture D_t (0 = omnidirectional) */
     double rx_height;           /* m above the scene plane (default 0) */
     double tx_height;           /* m above the scene plane (default 0) */
+    int per_channel;            /* 1: size[l] holds channel l's sizes */
+    sasnav_channel_size size[SASNAV_MAX_RX];
 } sasnav_array;
+
+/* Channel l's sizes: size[l] with per_channel, the array's four otherwise. */
+sasnav_channel_size sasnav_array_channel_size(const sasnav_array *array, int l);
+
+/* Gives the array's n_rx channels sizes of their own (per_channel = 1) and
+ * sets the array-wide values to the channels' largest lengths and mean
+ * heights. Checks them as sasnav_array_check does (SASNAV_ERR_ARG, naming
+ * the channel; the array is unchanged then). sizes NULL: back to one size
+ * (the array-wide values kept). */
+int sasnav_array_set_sizes(sasnav_array *array, const sasnav_channel_size *sizes);
+
+/* The array of channels pick[0..n-1] of `array` (repeats allowed): their
+ * rx_u and, with per_channel, their sizes (array-wide values recomputed as
+ * sasnav_array_set_sizes does); the other fields copied. Errors
+ * (SASNAV_ERR_ARG): n outside 1..SASNAV_MAX_RX, a pick outside the array. */
+int sasnav_array_select(const sasnav_array *array, const int *pick, int n, sasnav_array *out);
+
+/* The smallest nonzero receiver aperture over the channels (0: all
+ * omnidirectional): what bounds the along-track resolution D/2. */
+double sasnav_array_min_rx_length(const sasnav_array *array);
 
 /* Fills a uniform array of n receivers spaced `spacing`, all of length
  * `length`, transmitter of length `tx_length`. Returns SASNAV_ERR_ARG for
@@ -53,7 +91,8 @@ typedef struct {
 int sasnav_array_uniform(sasnav_array *array, int n, double spacing, double length,
                          double tx_length);
 
-/* Validates an array description (finite values, 1 <= n_rx <= MAX). */
+/* Validates an array description (finite values, 1 <= n_rx <= MAX; with
+ * per_channel, every channel's sizes). */
 int sasnav_array_check(const sasnav_array *array);
 
 /* The true (or modelled) geometry of one ping: the transmitter pose at

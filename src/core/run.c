@@ -374,11 +374,13 @@ int sasnav_run_subset(const sasnav_run *run, const int *pings, int n_pings, cons
         if (channels[l] < 0 || channels[l] >= run->array.n_rx)
             return sasnav_set_error(SASNAV_ERR_ARG, "subset channel %d outside 0..%d", channels[l],
                                     run->array.n_rx - 1);
-    sasnav_array a = run->array;
-    a.n_rx = nc;
-    for (int l = 0; l < nc; l++) a.rx_u[l] = run->array.rx_u[channels ? channels[l] : l];
+    int pick[SASNAV_MAX_RX];
+    for (int l = 0; l < nc; l++) pick[l] = channels ? channels[l] : l;
+    sasnav_array a;
+    int rc = sasnav_array_select(&run->array, pick, nc, &a);
+    if (rc) return rc;
     sasnav_run *r = NULL;
-    int rc = sasnav_run_alloc(&run->sys, &a, &run->win, n_pings, run->truth != NULL, &r);
+    rc = sasnav_run_alloc(&run->sys, &a, &run->win, n_pings, run->truth != NULL, &r);
     if (rc) return rc;
     size_t ns = (size_t)run->win.n_samples;
     sasnav_cfloat *tmp = NULL; /* a streamed ping whose channels are picked */

@@ -79,7 +79,7 @@ static int pc_spacing(const sasnav_array *a, double *d)
 }
 
 /* Two-way delay (s) from the Tx to the scene point (x, y, 0) and back to
- * receiver l, sensors of `ping` (heights from the array description). */
+ * receiver l, sensors of `ping` (channel l's heights). */
 static double delay_to(const sasnav_run *run, const sasnav_ping_pose *ping, int l, double x,
                        double y)
 {
@@ -88,8 +88,9 @@ static double delay_to(const sasnav_run *run, const sasnav_ping_pose *ping, int 
     sasnav_pose_apply(ping->array, a->rx_u[l], 0.0, &rx, &ry);
     double dtx = x - ping->tx.x, dty = y - ping->tx.y;
     double drx = x - rx, dry = y - ry;
-    double rt = sqrt(dtx * dtx + dty * dty + a->tx_height * a->tx_height);
-    double rr = sqrt(drx * drx + dry * dry + a->rx_height * a->rx_height);
+    sasnav_channel_size z = sasnav_array_channel_size(a, l);
+    double rt = sqrt(dtx * dtx + dty * dty + z.tx_height * z.tx_height);
+    double rr = sqrt(drx * drx + dry * dry + z.rx_height * z.rx_height);
     return (rt + rr) / run->sys.sound_speed;
 }
 

@@ -278,7 +278,8 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
     if (o->coarse_i > o->i) o->coarse_i = o->i;
     if (!(o->pixel > 0)) {
         o->pixel = sys->sound_speed / (4.0 * sys->bandwidth);
-        if (array->rx_length > 0 && array->rx_length / 4.0 < o->pixel) o->pixel = array->rx_length / 4.0;
+        double d_rx = sasnav_array_min_rx_length(array);
+        if (d_rx > 0 && d_rx / 4.0 < o->pixel) o->pixel = d_rx / 4.0;
     }
     if (!(o->coarse_pixel > 0)) o->coarse_pixel = 2.0 * o->pixel;
     double lambda = sasnav_wavelength(sys);

@@ -229,6 +229,18 @@ static void to_polar_any(const polar *g, double x, double y, double *rho, double
 /* The polar grid of items [a, b): over the tile (parent NULL: the grid
  * that is interpolated onto the pixels) or over the parent's whole grid,
  * widened by the interpolation's reach in its own samples. */
+/* The largest tx_height^2 + rx_height^2 over the channels. */
+static double max_height2(const sasnav_array *array)
+{
+    double m = 0.0;
+    for (int l = 0; l < (array->per_channel ? array->n_rx : 1); l++) {
+        sasnav_channel_size z = sasnav_array_channel_size(array, l);
+        double h = z.tx_height * z.tx_height + z.rx_height * z.rx_height;
+        if (h > m) m = h;
+    }
+    return m;
+}
+
 static int node_geometry(const ffbp_ctx *cx, int a, int b, const polar *parent, polar *g)
 {
     const sasnav_run *run = cx->run;
@@ -322,7 +334,7 @@ static int node_geometry(const ffbp_ctx *cx, int a, int b, const polar *parent, 
         /* Along rho the residual delay changes as 1 - cos of the angles
          * between the sensors' rays and the centre's: at most
          * (|t|^2 + |r|^2) / (2 rho^2) (times c), with the heights' part. */
-        double hh = run->array.tx_height * run->array.tx_height + run->array.rx_height * run->array.rx_height;
+        double hh = max_height2(&run->array);
         double er = (tu * tu + tv * tv + ru * ru + rv * rv + hh) / (2 * rmin * rmin);
         if (er > sr) sr = er;
     }
@@ -417,10 +429,11 @@ static int fill_polar(ffbp_ctx *cx, int a, int b, const polar *g, sasnav_cfloat 
         int l0 = a % cx->nrx, gi = l0 / cx->group;
         sasnav_op **op = &cx->leaf_op[gi];
         if (!*op) {
-            sasnav_array sub = cx->run->array;
-            sub.n_rx = b - a;
-            for (int l = 0; l < sub.n_rx; l++) sub.rx_u[l] = cx->run->array.rx_u[l0 + l];
-            rc = sasnav_op_create(&cx->run->sys, &sub, &cx->run->win, (int)n, x, y, &cx->leaf_oo, op);
+            sasnav_array sub;
+            int pick[SASNAV_MAX_RX];
+            for (int l = 0; l < b - a; l++) pick[l] = l0 + l;
+            rc = sasnav_array_select(&cx->run->array, pick, b - a, &sub);
+            if (!rc) rc = sasnav_op_create(&cx->run->sys, &sub, &cx->run->win, (int)n, x, y, &cx->leaf_oo, op);
         } else {
             rc = sasnav_op_set_points(*op, (int)n, x, y);
         }

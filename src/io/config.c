@@ -46,6 +46,8 @@ typedef enum {
     V_SNR,        /* double, finite or +inf */
     V_POSITIONS,  /* array.rx_positions: sequence of reals */
     V_TX_POSITIONS, /* array.tx_positions: sequence of reals, one per channel */
+    V_SIZES,      /* array.rx_heights etc.: sequence of reals, one per channel;
+                     imin = the member of sasnav_channel_size (0..3) */
     V_TARGETS,    /* scene.targets: sequence of [x, y, amp] */
     V_PAIR        /* trajectory.pair_error: mapping or none */
 } value_kind;
@@ -63,6 +65,8 @@ typedef struct {
     double rx_length, tx_length, rx_height, tx_height;
     int n_positions;
     double positions[SASNAV_MAX_RX];
+    int n_size[4]; /* per-channel lists: rx_lengths, tx_lengths, rx_heights, tx_heights */
+    double size_list[4][SASNAV_MAX_RX];
     int set_n_rx, set_spacing, set_positions, touched;
 } array_stage;
 
@@ -120,6 +124,14 @@ static const key_spec config_keys[] = {
      "m, transmitter aperture (0 = omni)"},
     {"array", "rx_height", V_REAL, AR(rx_height), R_NONNEG, 0, 0, "m above the scene plane"},
     {"array", "tx_height", V_REAL, AR(tx_height), R_NONNEG, 0, 0, "m above the scene plane"},
+    {"array", "rx_lengths", V_SIZES, AR(size_list), R_NONNEG, 0, 0,
+     "m, per-channel receiver apertures ([] = rx_length for all)"},
+    {"array", "tx_lengths", V_SIZES, AR(size_list), R_NONNEG, 1, 0,
+     "m, per-channel transmitter apertures ([] = tx_length)"},
+    {"array", "rx_heights", V_SIZES, AR(size_list), R_NONNEG, 2, 0,
+     "m, per-channel receiver heights ([] = rx_height)"},
+    {"array", "tx_heights", V_SIZES, AR(size_list), R_NONNEG, 3, 0,
+     "m, per-channel transmitter heights ([] = tx_height)"},
 
     {"swath", "range_min", V_REAL, SC(range_min), R_POS, 0, 0, "m"},
     {"swath", "range_max", V_REAL, SC(range_max), R_POS, 0, 0, "m"},
@@ -511,6 +523,15 @@ static int read_tx_positions(loader *L, struct fy_node *node, int line)
     return read_real_list(L, node, line, L->sc.channel_tx_u, &L->sc.n_channel_tx);
 }
 
+static int read_sizes(loader *L, const key_spec *k, struct fy_node *node, int line)
+{
+    if (!node || !fy_node_is_sequence(node))
+        return fail(L, line, "expected a sequence of reals [v0, v1, ...] in metres, one per channel");
+    int n = fy_node_sequence_item_count(node);
+    if (n > SASNAV_MAX_RX) return fail(L, line, "needs 0..%d values, got %d", SASNAV_MAX_RX, n);
+    return read_real_list(L, node, line, L->array.size_list[k->imin], &L->array.n_size[k->imin]);
+}
+
 static int read_targets(loader *L, struct fy_node *node, int line)
 {
     if (!node || !fy_node_is_sequence(node))
@@ -603,6 +624,7 @@ static int read_value(loader *L, const key_spec *k, struct fy_node *value, int l
         return rc;
     case V_POSITIONS: return read_positions(L, value, line);
     case V_TX_POSITIONS: return read_tx_positions(L, value, line);
+    case V_SIZES: return read_sizes(L, k, value, line);
     case V_TARGETS: return read_targets(L, value, line);
     case V_PAIR: return read_pair(L, value, line);
     }
@@ -710,6 +732,13 @@ static void stage_from_scenario(loader *L)
     L->array.tx_length = a->tx_length;
     L->array.rx_height = a->rx_height;
     L->array.tx_height = a->tx_height;
+    for (int l = 0; a->per_channel && l < a->n_rx; l++) {
+        L->array.size_list[0][l] = a->size[l].rx_length;
+        L->array.size_list[1][l] = a->size[l].tx_length;
+        L->array.size_list[2][l] = a->size[l].rx_height;
+        L->array.size_list[3][l] = a->size[l].tx_height;
+    }
+    for (int i = 0; i < 4; i++) L->array.n_size[i] = a->per_channel ? a->n_rx : 0;
 
     const sasnav_grid *g = &L->sc.image_grid;
     memset(&L->image, 0, sizeof L->image);
@@ -756,6 +785,25 @@ static int apply_array(loader *L)
     a.tx_length = s->tx_length;
     a.rx_height = s->rx_height;
     a.tx_height = s->tx_height;
+    sasnav_array_set_sizes(&a, NULL);
+    if (s->n_size[0] || s->n_size[1] || s->n_size[2] || s->n_size[3]) {
+        static const char *names[4] = {"rx_lengths", "tx_lengths", "rx_heights", "tx_heights"};
+        const double scalar[4] = {s->rx_length, s->tx_length, s->rx_height, s->tx_height};
+        sasnav_channel_size z[SASNAV_MAX_RX];
+        double v[4][SASNAV_MAX_RX];
+        for (int i = 0; i < 4; i++) {
+            if (s->n_size[i] && s->n_size[i] != a.n_rx)
+                return fail(L, 0, "array.%s has %d values for %d channels", names[i], s->n_size[i],
+                            a.n_rx);
+            for (int l = 0; l < a.n_rx; l++) v[i][l] = s->n_size[i] ? s->size_list[i][l] : scalar[i];
+        }
+        for (int l = 0; l < a.n_rx; l++) {
+            sasnav_channel_size zl = {v[0][l], v[1][l], v[2][l], v[3][l]};
+            z[l] = zl;
+        }
+        rc = sasnav_array_set_sizes(&a, z);
+        if (rc) return fail(L, 0, "%s", sasnav_last_error());
+    }
     rc = sasnav_array_check(&a);
     if (rc) return fail(L, 0, "array: %s", sasnav_last_error());
     L->sc.array = a;
@@ -1061,6 +1109,16 @@ static void write_key(FILE *f, const writer *w, const key_spec *k, int indent)
         fprintf(f, "%*s%s: [", indent, "", k->name);
         for (int l = 0; l < sc->array.n_rx; l++) {
             format_real(sc->array.rx_u[l], value, sizeof value);
+            fprintf(f, "%s%s", l ? ", " : "", value);
+        }
+        fprintf(f, "]  # %s\n", k->comment);
+        return;
+    case V_SIZES:
+        fprintf(f, "%*s%s: [", indent, "", k->name);
+        for (int l = 0; sc->array.per_channel && l < sc->array.n_rx; l++) {
+            const sasnav_channel_size *z = &sc->array.size[l];
+            const double m[4] = {z->rx_length, z->tx_length, z->rx_height, z->tx_height};
+            format_real(m[k->imin], value, sizeof value);
             fprintf(f, "%s%s", l ? ", " : "", value);
         }
         fprintf(f, "]  # %s\n", k->comment);

@@ -137,7 +137,24 @@ static int array_write(h5_ctx *c, const sasnav_array *a)
     if (!rc) rc = h5_write_attr_double(c, g, "tx_length", a->tx_length);
     if (!rc) rc = h5_write_attr_double(c, g, "rx_height", a->rx_height);
     if (!rc) rc = h5_write_attr_double(c, g, "tx_height", a->tx_height);
+    if (!rc && a->per_channel) {
+        double z[4 * SASNAV_MAX_RX];
+        for (int l = 0; l < a->n_rx; l++) {
+            z[4 * l] = a->size[l].rx_length;
+            z[4 * l + 1] = a->size[l].tx_length;
+            z[4 * l + 2] = a->size[l].rx_height;
+            z[4 * l + 3] = a->size[l].tx_height;
+        }
+        hsize_t d2[2] = {(hsize_t)a->n_rx, 4};
+        rc = h5_write_dataset(c, "/array/sizes", H5_REAL, 2, d2, NULL, z, "m");
+    }
     return rc;
+}
+
+/* Format version of a run: 2 with channels of their own (poses or sizes). */
+static int run_version(const sasnav_run *run)
+{
+    return run->channel_offset || run->array.per_channel ? 2 : 1;
 }
 
 /* --- aiding: /aiding/time, yaw_rate(+_sigma), velocity(+_sigma) ---------- */
@@ -216,7 +233,7 @@ int sasnav_run_write(const char *path, const sasnav_run *run)
     if (rc) return rc;
     h5_ctx c;
     h5_begin(&c, path);
-    rc = h5_create_tmp_version(&c, "sasnav-run", run->channel_offset ? 2 : 1);
+    rc = h5_create_tmp_version(&c, "sasnav-run", run_version(run));
     hsize_t dims[3] = {(hsize_t)run->n_pings, (hsize_t)run->array.n_rx, (hsize_t)run->win.n_samples};
     hsize_t ping_chunk[3] = {1, dims[1], dims[2]};
     if (!rc) rc = h5_write_dataset(&c, "/raw", H5_COMPLEX, 3, dims, ping_chunk, run->raw, "1");
@@ -273,7 +290,7 @@ int sasnav_run_writer_open(const char *path, const sasnav_run *header, sasnav_ru
     w->header.raw = NULL;
     w->header.nav = w->header.truth = NULL;
     w->header.aiding = NULL;
-    w->version = header->channel_offset ? 2 : 1;
+    w->version = run_version(header);
     w->header.channel_offset = NULL;
     memset(&w->header.source, 0, sizeof w->header.source);
     w->per_ping = (size_t)header->array.n_rx * (size_t)header->win.n_samples;
@@ -319,9 +336,9 @@ int sasnav_run_writer_finish(sasnav_run_writer *w, const sasnav_run *run)
     if (!rc && (run->n_pings != w->header.n_pings || run->array.n_rx != w->header.array.n_rx ||
                 run->win.n_samples != w->header.win.n_samples))
         rc = sasnav_set_error(SASNAV_ERR_ARG, "run writer: the run's shape differs from the one opened");
-    if (!rc && (run->channel_offset != NULL) != (w->version == 2))
-        rc = sasnav_set_error(SASNAV_ERR_ARG, "run writer: channel offsets must be given when the writer is "
-                                              "opened (they set the format version)");
+    if (!rc && run_version(run) != w->version)
+        rc = sasnav_set_error(SASNAV_ERR_ARG, "run writer: channel offsets and per-channel sizes must be "
+                                              "given when the writer is opened (they set the format version)");
     if (!rc) rc = sasnav_run_check_header(run);
     if (!rc) {
         H5Dclose(w->raw);
@@ -486,6 +503,22 @@ static int array_read(h5_ctx *c, int n_rx, sasnav_array *a)
     if (!rc) rc = h5_read_attr_double(c, g, "rx_height", &a->rx_height);
     if (!rc) rc = h5_read_attr_double(c, g, "tx_height", &a->tx_height);
     if (rc) return rc;
+    if (h5_exists(c, "/array/sizes")) {
+        if (c->version < 2)
+            return h5_fail(c, SASNAV_ERR_FORMAT, "/array/sizes needs format_version 2 (the file says %d)",
+                           c->version);
+        double z[4 * SASNAV_MAX_RX];
+        hsize_t d2[2] = {(hsize_t)n_rx, 4};
+        rc = h5_read_dataset_dims(c, "/array/sizes", H5_REAL, 2, d2, z);
+        if (rc) return rc;
+        sasnav_channel_size sz[SASNAV_MAX_RX];
+        for (int l = 0; l < n_rx; l++) {
+            sasnav_channel_size zl = {z[4 * l], z[4 * l + 1], z[4 * l + 2], z[4 * l + 3]};
+            sz[l] = zl;
+        }
+        rc = sasnav_array_set_sizes(a, sz);
+        if (rc) return h5_reframe(c, rc, "/array/sizes");
+    }
     rc = sasnav_array_check(a);
     if (rc) return h5_reframe(c, rc, g);
     return SASNAV_OK;

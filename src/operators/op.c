@@ -756,6 +756,7 @@ static int check_pose(sasnav_pose p)
 typedef struct {
     double tx_x, tx_y, tx_cos, tx_sin, tx_aperture; /* aperture = D_t / lambda (0: omni) */
     double ar_x, ar_y, ar_cos, ar_sin, rx_aperture;
+    double tx_height, rx_height;
 } ping_geometry;
 
 /* Tx range and pattern of points [n0, n1). Returns how many are closer than
@@ -764,7 +765,7 @@ HOT_LOOP static int setup_tx(sasnav_op *op, const ping_geometry *g, int n0, int 
 {
     const double *restrict x = op->x, *restrict y = op->y;
     double *restrict range = op->tx_range, *restrict gain = op->tx_gain;
-    double hz2 = op->array.tx_height * op->array.tx_height;
+    double hz2 = g->tx_height * g->tx_height;
     const double min2 = MIN_SENSOR_DISTANCE * MIN_SENSOR_DISTANCE;
     int bad = 0;
 #pragma omp simd reduction(+ : bad)
@@ -797,7 +798,7 @@ HOT_LOOP static long setup_block(sasnav_op *op, const ping_geometry *g, int l, i
     double u_rx = op->array.rx_u[l];
     double xr = g->ar_x + u_rx * g->ar_cos, yr = g->ar_y + u_rx * g->ar_sin;
     double ar_cos = g->ar_cos, ar_sin = g->ar_sin, aperture = g->rx_aperture;
-    double hz2 = op->array.rx_height * op->array.rx_height;
+    double hz2 = g->rx_height * g->rx_height;
     const double min2 = MIN_SENSOR_DISTANCE * MIN_SENSOR_DISTANCE;
     double inv_c = 1.0 / op->sys.sound_speed, inv_h = 1.0 / op->h, two_f0 = 2.0 * op->sys.f0;
     double start = op->grid_start, half = 0.5 * op->kernel.width, u_max = op->lf - half;
@@ -862,8 +863,8 @@ static int geometry_error(const sasnav_op *op, const ping_geometry *g, int per_c
     for (int l = 0; l < op->n_rx; l++) {
         const ping_geometry *gl = &g[per_channel ? l : 0];
         if (l == 0 || per_channel) {
-            int n = find_near_point(op, gl->tx_x, gl->tx_y, op->array.tx_height);
-            double dx = op->x[n] - gl->tx_x, dy = op->y[n] - gl->tx_y, h = op->array.tx_height;
+            int n = find_near_point(op, gl->tx_x, gl->tx_y, gl->tx_height);
+            double dx = op->x[n] - gl->tx_x, dy = op->y[n] - gl->tx_y, h = gl->tx_height;
             if (!(sqrt(dx * dx + dy * dy + h * h) >= MIN_SENSOR_DISTANCE))
                 return sasnav_set_error(SASNAV_ERR_GEOMETRY,
                                         "op: point %d (%g, %g) coincides with the Tx of channel %d",
@@ -871,8 +872,8 @@ static int geometry_error(const sasnav_op *op, const ping_geometry *g, int per_c
         }
         double u = op->array.rx_u[l];
         double xr = gl->ar_x + u * gl->ar_cos, yr = gl->ar_y + u * gl->ar_sin;
-        int n = find_near_point(op, xr, yr, op->array.rx_height);
-        double dx = op->x[n] - xr, dy = op->y[n] - yr, h = op->array.rx_height;
+        int n = find_near_point(op, xr, yr, gl->rx_height);
+        double dx = op->x[n] - xr, dy = op->y[n] - yr, h = gl->rx_height;
         if (!(sqrt(dx * dx + dy * dy + h * h) >= MIN_SENSOR_DISTANCE))
             return sasnav_set_error(SASNAV_ERR_GEOMETRY,
                                     "op: point %d (%g, %g) coincides with receiver %d", n,
@@ -881,42 +882,52 @@ static int geometry_error(const sasnav_op *op, const ping_geometry *g, int per_c
     return sasnav_set_error(SASNAV_ERR_GEOMETRY, "op: a point coincides with a sensor");
 }
 
-static ping_geometry make_geometry(const sasnav_op *op, const sasnav_ping_pose *ping)
+/* Channel l's geometry (its sizes: sasnav_array_channel_size). */
+static ping_geometry make_geometry(const sasnav_op *op, const sasnav_ping_pose *ping, int l)
 {
     double lambda = sasnav_wavelength(&op->sys);
     int beams = op->sys.beam_pattern;
+    sasnav_channel_size z = sasnav_array_channel_size(&op->array, l);
     ping_geometry g = {ping->tx.x, ping->tx.y, cos(ping->tx.theta), sin(ping->tx.theta),
-                       beams ? op->array.tx_length / lambda : 0.0,
+                       beams ? z.tx_length / lambda : 0.0,
                        ping->array.x, ping->array.y, cos(ping->array.theta),
-                       sin(ping->array.theta), beams ? op->array.rx_length / lambda : 0.0};
+                       sin(ping->array.theta), beams ? z.rx_length / lambda : 0.0,
+                       z.tx_height, z.rx_height};
     return g;
 }
 
-static int same_pose(sasnav_pose a, sasnav_pose b)
+/* Whether two channels' transmitters give the same Tx range and pattern. */
+static int same_tx(const ping_geometry *a, const ping_geometry *b)
 {
-    return a.x == b.x && a.y == b.y && a.theta == b.theta;
+    return a->tx_x == b->tx_x && a->tx_y == b->tx_y && a->tx_cos == b->tx_cos &&
+           a->tx_sin == b->tx_sin && a->tx_aperture == b->tx_aperture &&
+           a->tx_height == b->tx_height;
 }
 
 /* Geometry of every channel: poses[0] for all (one Tx, N Rx), or poses[l]
- * for channel l (per_channel). Channels are set up in runs of consecutive
- * channels that share a transmitter pose: the Tx range and pattern of each
- * point are computed once per run (the one-Tx case is one run). */
+ * for channel l (per_channel); each channel with its sizes when the array
+ * has sizes per channel. Channels are set up in runs of consecutive
+ * channels that share a transmitter (pose, length and height): the Tx
+ * range and pattern of each point are computed once per run (the one-Tx
+ * case is one run). */
 static int apply_geometry(sasnav_op *op, const sasnav_ping_pose *poses, int per_channel)
 {
-    int n_geom = per_channel ? op->n_rx : 1;
-    for (int c = 0; c < n_geom; c++)
+    int n_pose = per_channel ? op->n_rx : 1;
+    for (int c = 0; c < n_pose; c++)
         if (!check_pose(poses[c].tx) || !check_pose(poses[c].array))
             return per_channel ? sasnav_set_error(SASNAV_ERR_ARG,
                                                   "op: pose of channel %d is not finite", c)
                                : sasnav_set_error(SASNAV_ERR_ARG, "op: ping pose is not finite");
     op->have_geometry = 0;
+    per_channel = per_channel || op->array.per_channel;
+    int n_geom = per_channel ? op->n_rx : 1;
     ping_geometry g[SASNAV_MAX_RX];
-    for (int c = 0; c < n_geom; c++) g[c] = make_geometry(op, &poses[c]);
+    for (int c = 0; c < n_geom; c++) g[c] = make_geometry(op, &poses[n_pose > 1 ? c : 0], c);
     long dropped = 0;
     for (int l0 = 0, l1; l0 < op->n_rx; l0 = l1) {
         l1 = op->n_rx;
         if (per_channel)
-            for (l1 = l0 + 1; l1 < op->n_rx && same_pose(poses[l1].tx, poses[l0].tx); l1++) {}
+            for (l1 = l0 + 1; l1 < op->n_rx && same_tx(&g[l1], &g[l0]); l1++) {}
         int bad = 0, nl = l1 - l0, n_tasks = op->n_blocks * nl;
         const ping_geometry *gt = &g[per_channel ? l0 : 0];
 #pragma omp parallel num_threads(op->nthreads) reduction(+ : dropped, bad)

@@ -202,6 +202,11 @@ static uint64_t options_digest(const sasnav_run *run, const sasnav_navigate_opts
     h = sasnav_hash_doubles(h, a->rx_u, a->n_rx);
     const double ad[4] = {a->rx_length, a->tx_length, a->rx_height, a->tx_height};
     h = sasnav_hash_doubles(h, ad, 4);
+    for (int l = 0; a->per_channel && l < a->n_rx; l++) {
+        const double z[4] = {a->size[l].rx_length, a->size[l].tx_length, a->size[l].rx_height,
+                             a->size[l].tx_height};
+        h = sasnav_hash_doubles(h, z, 4);
+    }
     const int mi[1] = {(int)o->method};
     h = hash_ints(h, mi, 1);
     if (o->method == SASNAV_METHOD_SUBSPACE) {

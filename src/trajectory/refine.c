@@ -316,6 +316,11 @@ static uint64_t refine_digest(const sasnav_run *run, const sasnav_ping_pose *nav
                           (double)g->nx, (double)g->ny, 0, 0, 0};
     h = sasnav_hash_doubles(h, d, 25);
     h = sasnav_hash_doubles(h, run->array.rx_u, run->array.n_rx);
+    for (int l = 0; run->array.per_channel && l < run->array.n_rx; l++) {
+        const sasnav_channel_size *z = &run->array.size[l];
+        const double zd[4] = {z->rx_length, z->tx_length, z->rx_height, z->tx_height};
+        h = sasnav_hash_doubles(h, zd, 4);
+    }
     if (run->channel_offset) h = sasnav_hash_ping_poses(h, run->channel_offset, run->array.n_rx);
     return sasnav_hash_ping_poses(h, nav_in, run->n_pings);
 }

@@ -35,12 +35,10 @@ int sasnav_virtual_array(const sasnav_array *array, int k, sasnav_array *out)
         return sasnav_set_error(SASNAV_ERR_ARG,
                                 "virtual array: %d pings of %d channels make more than %d channels",
                                 k, array->n_rx, SASNAV_MAX_RX);
-    sasnav_array v = *array;
-    v.n_rx = k * array->n_rx;
+    int pick[SASNAV_MAX_RX];
     for (int j = 0; j < k; j++)
-        for (int l = 0; l < array->n_rx; l++) v.rx_u[j * array->n_rx + l] = array->rx_u[l];
-    *out = v;
-    return SASNAV_OK;
+        for (int l = 0; l < array->n_rx; l++) pick[j * array->n_rx + l] = l;
+    return sasnav_array_select(array, pick, k * array->n_rx, out);
 }
 
 /* sasnav_virtual_layout with the run's channel offsets (NULL: none). */

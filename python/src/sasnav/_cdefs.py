@@ -43,6 +43,16 @@ class PingPose(Structure):  # geometry.h
     _fields_ = [("tx", Pose), ("array", Pose)]
 
 
+class ChannelSizeC(Structure):  # geometry.h: sasnav_channel_size
+    _c_name_ = "sasnav_channel_size"
+    _fields_ = [
+        ("rx_length", c_double),
+        ("tx_length", c_double),
+        ("rx_height", c_double),
+        ("tx_height", c_double),
+    ]
+
+
 class SensorArrayC(Structure):  # geometry.h: sasnav_array
     _c_name_ = "sasnav_array"
     _fields_ = [
@@ -52,6 +62,8 @@ class SensorArrayC(Structure):  # geometry.h: sasnav_array
         ("tx_length", c_double),
         ("rx_height", c_double),
         ("tx_height", c_double),
+        ("per_channel", c_int),
+        ("size", ChannelSizeC * MAX_RX),
     ]
 
 
@@ -449,7 +461,7 @@ class NavigationC(Structure):  # navigate.h: struct sasnav_navigation
 
 # Every mirrored struct (checked by tests/test_layout.py).
 STRUCTS = [
-    Pose, PingPose, SensorArrayC, SystemC, Window, AidingC, PingSourceC, RunC, GridC, OpOpts, FfbpOpts,
+    Pose, PingPose, ChannelSizeC, SensorArrayC, SystemC, Window, AidingC, PingSourceC, RunC, GridC, OpOpts, FfbpOpts,
     CglsOpts, SceneC, RippleParams, TrajectoryParams, AidingParams, ScenarioC,
     PairOpts, PairCandidate, PairResult, DpcaOpts, NavigateProgress,
     NavigateOpts, NavigatePair, NavigationC,
@@ -505,6 +517,7 @@ PROTOTYPES = {
     "sasnav_system_check": (_i, [_P(SystemC)]),
     "sasnav_array_uniform": (_i, [_P(SensorArrayC), _i, _d, _d, _d]),
     "sasnav_array_check": (_i, [_P(SensorArrayC)]),
+    "sasnav_array_set_sizes": (_i, [_P(SensorArrayC), _P(ChannelSizeC)]),
     "sasnav_ping_displacement": (Pose, [_P(PingPose), _P(PingPose)]),
     "sasnav_ping_centroid": (Pose, [_P(PingPose)]),
     "sasnav_wrap_angle": (_d, [_d]),

@@ -172,13 +172,18 @@ class System:
 class SensorArray:
     """The sensor head (sasnav_array, geometry.h): receiver positions along
     the array axis (rx_u, m, relative to the midpoint), aperture lengths and
-    heights above the scene plane."""
+    heights above the scene plane. `sizes`, when given, is an [n_rx, 4]
+    array of each channel's own (rx_length, tx_length, rx_height,
+    tx_height) (sasnav_array_set_sizes: e.g. receivers at several heights);
+    the four scalars are then the channels' largest lengths and mean heights
+    as the library sets them."""
 
     rx_u: np.ndarray
     rx_length: float = 0.0
     tx_length: float = 0.0
     rx_height: float = 0.0
     tx_height: float = 0.0
+    sizes: Optional[np.ndarray] = None
 
     @classmethod
     def uniform(cls, n, spacing, length, tx_length):
@@ -195,8 +200,12 @@ class SensorArray:
     @classmethod
     def _from_c(cls, a):
         n = max(0, min(a.n_rx, C.MAX_RX))
+        sizes = None
+        if a.per_channel:
+            sizes = np.array([[a.size[l].rx_length, a.size[l].tx_length, a.size[l].rx_height,
+                               a.size[l].tx_height] for l in range(n)], dtype=np.float64)
         return cls(np.array(a.rx_u[:n], dtype=np.float64), a.rx_length, a.tx_length,
-                   a.rx_height, a.tx_height)
+                   a.rx_height, a.tx_height, sizes)
 
     def _to_c(self):
         u = np.asarray(self.rx_u, dtype=np.float64).reshape(-1)
@@ -207,7 +216,23 @@ class SensorArray:
         a.rx_u[: u.shape[0]] = u.tolist()
         a.rx_length, a.tx_length = float(self.rx_length), float(self.tx_length)
         a.rx_height, a.tx_height = float(self.rx_height), float(self.tx_height)
+        if self.sizes is not None:
+            z = np.asarray(self.sizes, dtype=np.float64)
+            if z.shape != (u.shape[0], 4):
+                raise ValueError(f"sizes must be [n_rx, 4] = [{u.shape[0]}, 4] "
+                                 f"(rx_length, tx_length, rx_height, tx_height), got {list(z.shape)}")
+            zc = (C.ChannelSizeC * u.shape[0])()
+            for l in range(u.shape[0]):
+                zc[l].rx_length, zc[l].tx_length, zc[l].rx_height, zc[l].tx_height = z[l].tolist()
+            check(lib().sasnav_array_set_sizes(ctypes.byref(a), zc))
         return a
+
+    def min_rx_length(self):
+        """The smallest nonzero receiver aperture (0: all omnidirectional)."""
+        d = [float(self.rx_length)] if self.sizes is None else \
+            [float(v) for v in np.asarray(self.sizes)[:, 0]]
+        d = [v for v in d if v > 0]
+        return min(d) if d else 0.0
 
 
 @dataclass
@@ -1282,8 +1307,9 @@ def default_grid(run, nav=None):
     c = centroids(nav)
     xmin, xmax = float(c["x"].min()) - 0.5, float(c["x"].max()) + 0.5
     res = run.system.sound_speed / (4.0 * run.system.bandwidth)
-    if run.array.rx_length > 0 and run.array.rx_length / 4.0 < res:
-        res = run.array.rx_length / 4.0
+    d_rx = run.array.min_rx_length()
+    if d_rx > 0 and d_rx / 4.0 < res:
+        res = d_rx / 4.0
     r0 = run.range_of_interest if run.range_of_interest > 0 else 10.0
     nx = int(math.ceil((xmax - xmin) / res)) + 1
     ny = int(math.ceil(1.6 / res)) + 1
