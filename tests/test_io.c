@@ -130,7 +130,13 @@ static int runs_identical(const sasnav_run *a, const sasnav_run *b)
            SAME_BITS(a->array.rx_length, b->array.rx_length) &&
            SAME_BITS(a->array.tx_length, b->array.tx_length) &&
            SAME_BITS(a->array.rx_height, b->array.rx_height) &&
-           SAME_BITS(a->array.tx_height, b->array.tx_height);
+           SAME_BITS(a->array.tx_height, b->array.tx_height) &&
+           a->array.per_channel == b->array.per_channel;
+    for (int l = 0; same && a->array.per_channel && l < a->array.n_rx; l++)
+        same = SAME_BITS(a->array.size[l].rx_length, b->array.size[l].rx_length) &&
+               SAME_BITS(a->array.size[l].tx_length, b->array.size[l].tx_length) &&
+               SAME_BITS(a->array.size[l].rx_height, b->array.size[l].rx_height) &&
+               SAME_BITS(a->array.size[l].tx_height, b->array.size[l].tx_height);
     same = same && SAME_BITS(a->win.t0, b->win.t0) && a->win.n_samples == b->win.n_samples &&
            a->n_pings == b->n_pings;
     same = same && SAME_BITS(a->ping_spacing, b->ping_spacing) && SAME_BITS(a->speed, b->speed) &&
@@ -595,6 +601,96 @@ static void test_channels(void)
         }
         H5Fclose(f);
         CHECK_FAILS(sasnav_run_read(path, &back), SASNAV_ERR_FORMAT);
+        CHECK(strstr(sasnav_last_error(), cases[c].expect) != NULL,
+              "%s: message '%s' does not say '%s'", cases[c].name, sasnav_last_error(), cases[c].expect);
+        CHECK(back == NULL, "%s: run returned", cases[c].name);
+        check_no_open_objects(cases[c].name);
+    }
+    sasnav_run_free(run);
+}
+
+/* Per-channel sizes (/array/sizes, format version 2): round trip bit for
+ * bit through both writers and both readers, kept by subsets; the
+ * array-wide values follow the channels (largest lengths, mean heights);
+ * a version-1 file with /array/sizes, NaN, a negative length and a wrong
+ * shape are refused with the dataset named. */
+static void test_channel_sizes(void)
+{
+    sasnav_run *run = random_run(321, 5, 3, 16, 1), *back = NULL;
+    if (!run) return;
+    sasnav_channel_size z[3] = {{0.05, 0.02, 0.30, 0.25}, {0.0, 0.02, 0.20, 0.25}, {0.04, 0.03, 0.25, 0.26}};
+    CHECK_OK(sasnav_array_set_sizes(&run->array, z));
+    CHECK(run->array.per_channel == 1 && run->array.rx_length == 0.05 && run->array.tx_length == 0.03 &&
+              fabs(run->array.rx_height - 0.25) < 1e-15 && fabs(run->array.tx_height - 0.76 / 3) < 1e-15,
+          "array-wide values are not the channels' largest lengths and mean heights");
+    CHECK(sasnav_array_min_rx_length(&run->array) == 0.04, "smallest nonzero rx length %g",
+          sasnav_array_min_rx_length(&run->array));
+    const char *path = tmp_file("sizes-v2.h5");
+    CHECK_OK(sasnav_run_write(path, run));
+    CHECK(file_version(path) == 2, "per-channel sizes written as version %d", file_version(path));
+    CHECK_OK(sasnav_run_read(path, &back));
+    CHECK(back && runs_identical(run, back), "per-channel sizes: round trip is not bit-exact");
+    sasnav_run_free(back);
+    back = NULL;
+    CHECK_OK(sasnav_run_open(path, &back));
+    CHECK(back && back->array.per_channel && memcmp(back->array.size, z, sizeof z) == 0,
+          "per-channel sizes: streamed open lost them");
+    sasnav_run_free(back);
+    back = NULL;
+    const char *w2 = tmp_file("sizes-writer.h5");
+    sasnav_run_writer *w = NULL;
+    CHECK_OK(sasnav_run_writer_open(w2, run, &w));
+    for (int p = 0; w && p < run->n_pings; p++) CHECK_OK(sasnav_run_writer_put(w, p, sasnav_run_ping(run, p)));
+    if (w) CHECK_OK(sasnav_run_writer_finish(w, run));
+    CHECK_OK(sasnav_run_read(w2, &back));
+    CHECK(back && runs_identical(run, back) && file_version(w2) == 2, "per-channel sizes: writer round trip");
+    sasnav_run_free(back);
+    back = NULL;
+
+    int pings[2] = {3, 1}, chans[2] = {2, 1};
+    sasnav_run *sub = NULL;
+    CHECK_OK(sasnav_run_subset(run, pings, 2, chans, 2, &sub));
+    CHECK(sub && sub->array.per_channel && memcmp(&sub->array.size[0], &z[2], sizeof z[0]) == 0 &&
+              memcmp(&sub->array.size[1], &z[1], sizeof z[0]) == 0 && sub->array.rx_length == 0.04,
+          "subset: per-channel sizes not carried");
+    sasnav_run_free(sub);
+
+    sasnav_channel_size bad[3];
+    memcpy(bad, z, sizeof bad);
+    bad[1].rx_height = NAN;
+    sasnav_array before = run->array;
+    CHECK_FAILS(sasnav_array_set_sizes(&run->array, bad), SASNAV_ERR_ARG);
+    CHECK(strstr(sasnav_last_error(), "channel 1") != NULL, "message '%s' does not name the channel",
+          sasnav_last_error());
+    CHECK(memcmp(&before, &run->array, sizeof before) == 0, "a refused set_sizes changed the array");
+    bad[1].rx_height = 0.2;
+    bad[2].tx_length = -0.01;
+    CHECK_FAILS(sasnav_array_set_sizes(&run->array, bad), SASNAV_ERR_ARG);
+    struct {
+        const char *name, *expect;
+        int kind; /* 0 version 1, 1 NaN, 2 negative length, 3 wrong shape */
+    } cases[] = {{"sizes-badversion.h5", "format_version 2", 0},
+                 {"sizes-nan.h5", "finite", 1},
+                 {"sizes-negative.h5", ">= 0", 2},
+                 {"sizes-shape.h5", "/array/sizes", 3}};
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        const char *p = tmp_file(cases[c].name);
+        CHECK_OK(sasnav_run_write(p, run));
+        hid_t f = open_rw(p);
+        double v = NAN;
+        switch (cases[c].kind) {
+        case 0: set_attr_int(f, "/", "format_version", 1); break;
+        case 1: poke(f, "/array/sizes", H5T_NATIVE_DOUBLE, 6, 2, &v); break;
+        case 2: v = -0.05; poke(f, "/array/sizes", H5T_NATIVE_DOUBLE, 4, 2, &v); break;
+        case 3: {
+            hsize_t d[2] = {2, 4};
+            double zeros[8] = {0};
+            replace_dataset(f, "/array/sizes", H5T_NATIVE_DOUBLE, 2, d, zeros);
+            break;
+        }
+        }
+        H5Fclose(f);
+        CHECK_FAILS(sasnav_run_read(p, &back), SASNAV_ERR_FORMAT);
         CHECK(strstr(sasnav_last_error(), cases[c].expect) != NULL,
               "%s: message '%s' does not say '%s'", cases[c].name, sasnav_last_error(), cases[c].expect);
         CHECK(back == NULL, "%s: run returned", cases[c].name);
@@ -1172,6 +1268,7 @@ int main(void)
 {
     test_aiding();
     test_channels();
+    test_channel_sizes();
     test_grid();
     test_run_container();
     test_run_round_trip();

@@ -115,7 +115,7 @@ static void test_ingest_to_file(const char *dir)
                   !memcmp(a->nav, b->nav, sizeof *a->nav * (size_t)a->n_pings) && b->truth &&
                   !memcmp(a->truth, b->truth, sizeof *a->truth * (size_t)a->n_pings) &&
                   a->ping_spacing == b->ping_spacing && a->range_of_interest == b->range_of_interest &&
-                  !memcmp(&a->sys, &b->sys, sizeof a->sys),
+                  test_same_system(&a->sys, &b->sys),
               "the run written ping by ping differs from the one read whole");
         CHECK(info.n_pings == a->n_pings && info.array.n_rx == a->array.n_rx &&
                   info.win.n_samples == a->win.n_samples && info.raw == NULL && info.nav == NULL,

@@ -45,6 +45,15 @@ sasnav_run *test_tank_run(const sasnav_tank_params *p);
  * points (a lighter scene for quick tests). */
 sasnav_run *test_tank_short_run(int n_pings, int jump_ping);
 
+/* Field-by-field equality of two systems (memcmp would compare the
+ * struct's padding bytes, which copies need not keep). */
+static inline int test_same_system(const sasnav_system *a, const sasnav_system *b)
+{
+    return a->sound_speed == b->sound_speed && a->f0 == b->f0 && a->bandwidth == b->bandwidth &&
+           a->sample_rate == b->sample_rate && a->taper == b->taper &&
+           a->attenuation == b->attenuation && a->beam_pattern == b->beam_pattern;
+}
+
 /* Final-stage estimator iterations for the tests that run whole searches:
  * coarse ones keep the sanitized build inside its time budget. */
 #ifdef SASNAV_TEST_SANITIZED
