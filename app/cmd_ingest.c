@@ -29,7 +29,8 @@ static const char *help =
     "  --range R           (--wav) range of interest: centre of the estimation\n"
     "                      and image grids (m, default 1.5, the tank's plate)\n"
     "  --background DIR    empty-scene recording, subtracted ping by ping\n"
-    "  --mic N             microphone (column) 1 or 2 (default 1)\n"
+    "  --mic N             microphone (column) 1 or 2, or both: one ping of two\n"
+    "                      channels, each at its microphone's height (default 1)\n"
     "  --first N           first ping, 0-based (default 0)\n"
     "  --stride K          keep every K-th ping (default 1)\n"
     "  --pings N           keep at most N pings (default: all)\n"
@@ -113,7 +114,10 @@ int cmd_ingest(int argc, char **argv)
         case 'a': dir = optarg; break;
         case 'b': bgdir = optarg; break;
         case 'm':
-            if (cli_parse_int(optarg, 1, 2, &v)) return cli_usage("ingest", "--mic needs 1 or 2");
+            if (!strcmp(optarg, "both"))
+                v = 0;
+            else if (cli_parse_int(optarg, 1, 2, &v))
+                return cli_usage("ingest", "--mic needs 1, 2 or both");
             o.microphone = (int)v;
             break;
         case 'F':
@@ -221,12 +225,18 @@ int cmd_ingest(int argc, char **argv)
                               : cli_fail("ingest", rc, "cannot process %s", dir);
     }
     const sasnav_run *run = &w.header;
+    char rx_heights[64];
+    if (run->array.per_channel && run->array.n_rx == 2)
+        snprintf(rx_heights, sizeof rx_heights, "Rx %.4f and %.4f", run->array.size[0].rx_height,
+                 run->array.size[1].rx_height);
+    else
+        snprintf(rx_heights, sizeof rx_heights, "Rx %.4f", run->array.rx_height);
     fprintf(stderr,
-            "sasnav ingest: %d of %d pings x %d samples (fs %g kHz, f0 %g kHz, B %g kHz, "
-            "c %.2f m/s, t0 %.4f ms, heights Tx %.4f Rx %.4f m) -> %s\n",
-            run->n_pings, n_recorded, run->win.n_samples, run->sys.sample_rate / 1e3,
+            "sasnav ingest: %d of %d pings x %d channel(s) x %d samples (fs %g kHz, f0 %g kHz, "
+            "B %g kHz, c %.2f m/s, t0 %.4f ms, heights Tx %.4f %s m) -> %s\n",
+            run->n_pings, n_recorded, run->array.n_rx, run->win.n_samples, run->sys.sample_rate / 1e3,
             run->sys.f0 / 1e3, run->sys.bandwidth / 1e3, run->sys.sound_speed, run->win.t0 * 1e3,
-            run->array.tx_height, run->array.rx_height, output);
+            run->array.tx_height, rx_heights, output);
     free(w.nav);
     return 0;
 }

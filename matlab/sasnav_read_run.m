@@ -16,7 +16,10 @@ function run = sasnav_read_run(file)
 %                      sample_rate, taper, attenuation, beam_pattern, t0,
 %                      ping_spacing, speed, tx_lag, range_of_interest
 %   run.array          the /array attributes (rx_length, tx_length,
-%                      rx_height, tx_height) and rx_u (n_rx x 1)
+%                      rx_height, tx_height) and rx_u (n_rx x 1); with
+%                      channels of their own sizes (format version 2)
+%                      also sizes (n_rx x 4: rx_length, tx_length,
+%                      rx_height, tx_height of each channel)
 %   run.nav.tx, run.nav.array        n_pings x 3, columns x, y, theta
 %   run.truth.tx, run.truth.array    the same (only when /truth exists)
 %   run.aiding.time, .yaw_rate, .yaw_rate_sigma (n_pings x 1) and

@@ -79,7 +79,10 @@ typedef struct {
     double radius;      /* m, radius of the sensor circle (default 0.85, the
                            authors' value; SysParams puts the speaker at
                            0.8485 m and the microphones at 0.8615 m) */
-    int microphone;     /* 1 (default, the authors' channel) or 2 */
+    int microphone;     /* 1 (default, the authors' channel), 2, or 0: both,
+                           one ping of two channels (Mic1, Mic2) at the same
+                           (x, y) and their own heights (per-channel sizes,
+                           geometry.h) */
     int first_ping;     /* first ping used (0-based, default 0) */
     int ping_stride;    /* use every ping_stride-th ping (default 1) */
     int max_pings;      /* at most this many pings (0: all, default) */
@@ -116,7 +119,9 @@ int sasnav_airsas_remove_room(int n_pings, int n, float *ts);
  *    (x, y), yaw a + 90 degrees (boresight towards the centre); heights above
  *    the scene plane z = 0: speaker z + height / 1000 - centre z and
  *    microphone z + height / 1000 - centre z; omnidirectional elements
- *    (beam_pattern 0), no spreading loss (SASNAV_ATTEN_NONE), one receiver;
+ *    (beam_pattern 0), no spreading loss (SASNAV_ATTEN_NONE), one receiver
+ *    (two with microphone 0: channel l is Mic(l+1), rx_u 0, each with its
+ *    own height; the room response removed per microphone);
  *  - one sound speed for the run: c = 331.4 + 0.6 T with T the mean
  *    temperature of all pings of the recording (the authors use one c per
  *    ping; over a recording T varies by ~0.05 deg C, i.e. 0.03 m/s, a delay

@@ -60,12 +60,14 @@ static int opts_check(const sasnav_airsas *rec, const sasnav_airsas_opts *o)
 {
     if (!isfinite(o->radius) || !(o->radius > 0))
         return sasnav_set_error(SASNAV_ERR_ARG, "airsas: radius must be > 0, got %g m", o->radius);
-    if (o->microphone != 1 && o->microphone != 2)
-        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: microphone must be 1 or 2, got %d", o->microphone);
-    if (o->microphone > rec->n_channels)
-        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: microphone %d asked, the flights have %d column(s)",
-                                o->microphone, rec->n_channels);
-    if (o->microphone == 2 && !rec->has_mic2)
+    if (o->microphone < 0 || o->microphone > 2)
+        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: microphone must be 1, 2 or 0 (both), got %d",
+                                o->microphone);
+    if ((o->microphone == 0 ? 2 : o->microphone) > rec->n_channels)
+        return sasnav_set_error(SASNAV_ERR_ARG, "airsas: microphone %s asked, the flights have %d column(s)",
+                                o->microphone == 0 ? "1 and 2" : o->microphone == 1 ? "1" : "2",
+                                rec->n_channels);
+    if (o->microphone != 1 && !rec->has_mic2)
         return sasnav_set_error(SASNAV_ERR_ARG, "airsas: SysParams.csv gives no Mic2 position");
     if (o->first_ping < 0 || o->first_ping >= rec->n_pings)
         return sasnav_set_error(SASNAV_ERR_ARG, "airsas: first ping %d outside 0..%d", o->first_ping,
@@ -199,10 +201,12 @@ int sasnav_airsas_stream(const sasnav_airsas *rec, const sasnav_airsas *backgrou
     rc = make_plan(rec, &o, &plan);
     if (rc) return rc;
     size_t n = (size_t)rec->n_samples, flight = n * (size_t)rec->n_channels;
-    int mic = o.microphone - 1;
+    /* the microphones used: channel c of the run is microphone mics[c] */
+    int n_mic = o.microphone == 0 ? 2 : 1;
+    int mics[2] = {o.microphone == 0 ? 0 : o.microphone - 1, 1};
     flight_scratch scratch = {NULL, NULL};
     float *ts = malloc(sizeof(float) * n);
-    double *cm = calloc(n, sizeof *cm);
+    double *cm = calloc(n * (size_t)n_mic, sizeof *cm);
     sasnav_ping_pose *nav = malloc(sizeof *nav * (size_t)n_keep);
     if (!rec->samples) scratch.rec = malloc(sizeof(float) * flight);
     if (background && !background->samples) scratch.bg = malloc(sizeof(float) * flight);
@@ -212,11 +216,12 @@ int sasnav_airsas_stream(const sasnav_airsas *rec, const sasnav_airsas *backgrou
 
     /* Pass 1 over every flight of the recording (kept or not): the records
      * checked, and their mean (the room response). */
-    for (int p = 0; !rc && p < rec->n_pings; p++) {
-        rc = flight_record(rec, background, p, mic, plan, &scratch, ts);
-        for (size_t m = 0; !rc && o.remove_room && m < n; m++) cm[m] += ts[m];
-    }
-    for (size_t m = 0; !rc && o.remove_room && m < n; m++) cm[m] /= rec->n_pings;
+    for (int p = 0; !rc && p < rec->n_pings; p++)
+        for (int c = 0; !rc && c < n_mic; c++) {
+            rc = flight_record(rec, background, p, mics[c], plan, &scratch, ts);
+            for (size_t m = 0; !rc && o.remove_room && m < n; m++) cm[c * n + m] += ts[m];
+        }
+    for (size_t m = 0; !rc && o.remove_room && m < n * (size_t)n_mic; m++) cm[m] /= rec->n_pings;
 
     /* The run's header. */
     sasnav_run hdr;
@@ -228,10 +233,18 @@ int sasnav_airsas_stream(const sasnav_airsas *rec, const sasnav_airsas *backgrou
     hdr.sys.sound_speed = 331.4 + 0.6 * t_mean;
     hdr.sys.attenuation = SASNAV_ATTEN_NONE;
     hdr.sys.beam_pattern = 0;
-    hdr.array.n_rx = 1;
+    hdr.array.n_rx = n_mic;
     double h = rec->height_mm[0] / 1000.0 - rec->center[2];
     hdr.array.tx_height = rec->speaker[2] + h;
-    hdr.array.rx_height = rec->mic[mic][2] + h;
+    hdr.array.rx_height = rec->mic[mics[0]][2] + h;
+    if (n_mic == 2) { /* both at the array's origin, each at its own height */
+        sasnav_channel_size z[2];
+        for (int c = 0; c < 2; c++) {
+            sasnav_channel_size zc = {0.0, 0.0, rec->mic[mics[c]][2] + h, hdr.array.tx_height};
+            z[c] = zc;
+        }
+        if (!rc) rc = sasnav_array_set_sizes(&hdr.array, z);
+    }
     if (!rc) rc = sasnav_ingest_system(plan, &hdr.sys);
     if (!rc) rc = sasnav_ingest_window(plan, &hdr.win);
     if (!rc) {
@@ -251,7 +264,7 @@ int sasnav_airsas_stream(const sasnav_airsas *rec, const sasnav_airsas *backgrou
         if (rc) rc = sasnav_prefix_error(rc, "airsas");
     }
     if (!rc) {
-        out = malloc(sizeof *out * (size_t)hdr.win.n_samples);
+        out = malloc(sizeof *out * (size_t)hdr.win.n_samples * (size_t)n_mic);
         if (!out) rc = sasnav_set_error(SASNAV_ERR_NOMEM, "airsas: out of memory");
     }
     if (!rc) rc = sink->begin(sink->ctx, &hdr);
@@ -260,11 +273,13 @@ int sasnav_airsas_stream(const sasnav_airsas *rec, const sasnav_airsas *backgrou
      * ingest chain. */
     for (int k = 0; !rc && k < n_keep; k++) {
         int p = o.first_ping + k * o.ping_stride;
-        rc = flight_record(rec, background, p, mic, plan, &scratch, ts);
-        if (!rc && o.remove_room) remove_room_record((int)n, cm, ts);
-        if (!rc) {
-            rc = sasnav_ingest_execute(plan, 1, ts, out);
-            if (rc) rc = sasnav_prefix_error(rc, "airsas: flight %d", p + 1);
+        for (int c = 0; !rc && c < n_mic; c++) {
+            rc = flight_record(rec, background, p, mics[c], plan, &scratch, ts);
+            if (!rc && o.remove_room) remove_room_record((int)n, cm + c * n, ts);
+            if (!rc) {
+                rc = sasnav_ingest_execute(plan, 1, ts, out + (size_t)c * (size_t)hdr.win.n_samples);
+                if (rc) rc = sasnav_prefix_error(rc, "airsas: flight %d", p + 1);
+            }
         }
         if (!rc) rc = sink->ping(sink->ctx, k, out);
     }

@@ -165,7 +165,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --range R           (--wav) range of interest: centre of the estimation
                         and image grids (m, default 1.5, the tank's plate)
     --background DIR    empty-scene recording, subtracted ping by ping
-    --mic N             microphone (column) 1 or 2 (default 1)
+    --mic N             microphone (column) 1 or 2, or both: one ping of two
+                        channels, each at its microphone's height (default 1)
     --first N           first ping, 0-based (default 0)
     --stride K          keep every K-th ping (default 1)
     --pings N           keep at most N pings (default: all)
