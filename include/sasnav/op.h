@@ -7,7 +7,10 @@
  *   phi_l(t_m) = sum_n p(t_m - tau_ln) G_ln rho_n,
  *   G_ln = alpha_ln exp(-j 2 pi f0 tau_ln),
  *   tau_ln = (|z_n - z_t| + |z_n - z_rl|) / c      (3-D distances: heights),
- *   alpha_ln = Tx pattern * Rx pattern * attenuation.
+ *   alpha_ln = Tx pattern * Rx pattern * attenuation,
+ *
+ * with channel l's heights and apertures (the array's, or its own with
+ * sasnav_array.per_channel: geometry.h).
  *
  * Time interpolation is a type-1/type-2 NUFFT: spread each point's
  * contribution with an "exponential of semicircle" kernel onto an oversampled
@@ -101,7 +104,7 @@ int sasnav_op_set_geometry(sasnav_op *op, const sasnav_ping_pose *ping);
 /* Channels as Tx-Rx pairs (docs/model.md, "Channel layouts"): channel l is
  * receiver l of the array (rx_u[l] along the axis of channels[l].array)
  * with its own transmitter channels[l].tx; n_rx entries. Lengths and
- * heights are the array's. Every channel with the same pose gives exactly
+ * heights are channel l's (sasnav_array_channel_size). Every channel with the same pose gives exactly
  * set_geometry's result (the one-Tx, N-Rx ping); a virtual array made of K
  * pings of a SISO or SIMO sonar is K groups of channels, each group with
  * its ping's poses (sasnav_virtual_ping, virtual.h). Consecutive channels
