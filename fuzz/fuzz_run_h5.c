@@ -1,7 +1,7 @@
 /* fuzz_run_h5: sasnav_run_read on structure-aware generated run files
  * (h5gen.h: the input drives the writing of a run file with fuzzed types,
- * shapes, values and members; /channels and format version 2 on one
- * option bit). Contract: SASNAV_OK with a run that passes
+ * shapes, values and members; /channels, /array/sizes and format
+ * version 2 on option bits). Contract: SASNAV_OK with a run that passes
  * sasnav_run_check, or SASNAV_ERR_FORMAT / IO / NOMEM with a message. */
 #include "fuzz_common.h"
 #include "h5gen.h"
@@ -23,6 +23,7 @@ static double fill_nav_array(size_t i, const hsize_t *dims, int rank)
 static double fill_time(size_t i, const hsize_t *dims, int rank) { return 0.1 * (double)i; }
 static double fill_zero(size_t i, const hsize_t *dims, int rank) { return 0.0; }
 static double fill_sigma(size_t i, const hsize_t *dims, int rank) { return 1e-3; }
+static double fill_size(size_t i, const hsize_t *dims, int rank) { return 0.01 * (double)(i % 4 + 1); }
 static double fill_vel(size_t i, const hsize_t *dims, int rank) { return i % 2 == 0 ? 2.0 : 0.0; }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -73,13 +74,19 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             h5g_dataset(&g, f, "/aiding/velocity_sigma", D_REAL, 2, dv, fill_sigma);
         }
     }
-    if (opt & 16) { /* format version 2: per-channel offsets */
+    if (opt & 48) { /* format version 2: per-channel offsets and / or sizes */
         H5Adelete(f, "format_version");
         h5g_attr(&g, f, "format_version", A_INT, 2, NULL);
+    }
+    if (opt & 16) {
         hsize_t dc[2] = {nrx, 3};
         h5g_group(f, "/channels");
         h5g_dataset(&g, f, "/channels/tx", D_REAL, 2, dc, fill_zero);
         h5g_dataset(&g, f, "/channels/array", D_REAL, 2, dc, fill_zero);
+    }
+    if (opt & 32) {
+        hsize_t ds[2] = {nrx, 4};
+        h5g_dataset(&g, f, "/array/sizes", D_REAL, 2, ds, fill_size);
     }
     h5g_extras(&g, f);
     H5Fclose(f);

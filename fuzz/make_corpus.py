@@ -156,6 +156,17 @@ def cli_outputs():
         subprocess.run([CLI, "simulate", "--preset", "point", "--config", chan, "--threads", "1", "-o", h5],
                        check=True, capture_output=True)
         out("fuzz_run_h5_raw", "run-channels", open(h5, "rb").read())
+        # format version 2: two channels of their own heights and lengths
+        sizes = os.path.join(tmp, "sizes.yaml")
+        with open(sizes, "w") as f:
+            f.write("preset: point\narray: {rx_positions: [0.0, 0.05], rx_heights: [0.5, 1.0], "
+                    "tx_lengths: [0.04, 0.05]}\nswath: {range_min: 9.9, range_max: 10.1}\n"
+                    "trajectory: {n_pings: 3, pair_error: none}\nnoise: {snr_db: inf}\n")
+        shutil.copy(sizes, os.path.join(CORPUS, "fuzz_config", "sizes.yaml"))
+        h5 = os.path.join(tmp, "run-sizes.h5")
+        subprocess.run([CLI, "simulate", "--preset", "point", "--config", sizes, "--threads", "1", "-o", h5],
+                       check=True, capture_output=True)
+        out("fuzz_run_h5_raw", "run-sizes", open(h5, "rb").read())
         # the same run in HDF5's oldest format without checksums or filters
         # (as h5py or MATLAB may write): what HDF5's parsers see unprotected
         legacy = os.path.join(tmp, "legacy.h5")
