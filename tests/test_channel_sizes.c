@@ -210,49 +210,22 @@ static void test_echo_phase(const sasnav_run *run, double px, double py)
     CHECK(worst_mean > 0.5, "the heights change nothing (%.2e rad): the test cannot fail", worst_mean);
 }
 
-static double image_peak(const sasnav_grid *g, const sasnav_cfloat *img, double *px, double *py)
-{
-    int best = 0;
-    for (int i = 1; i < g->nx * g->ny; i++)
-        if (cabsf(img[i]) > cabsf(img[best])) best = i;
-    int ix = best % g->nx, iy = best / g->nx;
-    *px = g->x0 + ix * g->dx;
-    *py = g->y0 + iy * g->dy;
-    if (ix > 0 && ix < g->nx - 1) {
-        double a = cabsf(img[best - 1]), b = cabsf(img[best]), c = cabsf(img[best + 1]);
-        *px += g->dx * 0.5 * (a - c) / (a - 2 * b + c);
-    }
-    if (iy > 0 && iy < g->ny - 1) {
-        double a = cabsf(img[best - g->nx]), b = cabsf(img[best]), c = cabsf(img[best + g->nx]);
-        *py += g->dy * 0.5 * (a - c) / (a - 2 * b + c);
-    }
-    return cabsf(img[best]);
-}
-
 static void test_focus(sasnav_run *run, double tx_, double ty_)
 {
     sasnav_grid g;
     CHECK_OK(sasnav_grid_make(tx_ - 0.0407, tx_ + 0.0393, 41, ty_ - 0.0403, ty_ + 0.0397, 41, &g));
     size_t n = (size_t)g.nx * g.ny;
     sasnav_cfloat *img = malloc(sizeof *img * n), *mean = malloc(sizeof *mean * n);
-    sasnav_cfloat *fb = malloc(sizeof *fb * n);
+    double ffbp_db = test_backproject_ffbp(run, run->truth, &g, img);
     sasnav_op_opts oo;
     sasnav_op_default_opts(&oo);
     oo.nthreads = 1;
-    CHECK_OK(sasnav_backproject(run, run->truth, &g, &oo, img));
-    CHECK_OK(sasnav_ffbp_tile(run, run->truth, &g, 0, g.nx, 0, g.ny, &oo, NULL, fb, NULL, NULL));
     sasnav_array keep = run->array;
     CHECK_OK(sasnav_array_set_sizes(&run->array, NULL)); /* one size: the mean heights */
     CHECK_OK(sasnav_backproject(run, run->truth, &g, &oo, mean));
     run->array = keep;
     double x, y, xm, ym;
-    double peak = image_peak(&g, img, &x, &y), peak_mean = image_peak(&g, mean, &xm, &ym);
-    double e = 0, r = 0;
-    for (size_t i = 0; i < n; i++) {
-        e += pow(cabsf(fb[i] - img[i]), 2);
-        r += pow(cabsf(img[i]), 2);
-    }
-    double ffbp_db = 10 * log10(e / r);
+    double peak = test_image_peak(&g, img, &x, &y), peak_mean = test_image_peak(&g, mean, &xm, &ym);
     printf("focus: peak at (%+.2f, %+.2f) mm from the target; one-height image: peak %.3f of it, at "
            "(%+.1f, %+.1f) mm; FFBP vs direct %.1f dB\n",
            1e3 * (x - tx_), 1e3 * (y - ty_), peak_mean / peak, 1e3 * (xm - tx_), 1e3 * (ym - ty_), ffbp_db);
@@ -261,7 +234,6 @@ static void test_focus(sasnav_run *run, double tx_, double ty_)
     CHECK(ffbp_db < -30, "FFBP with per-channel sizes %.1f dB from the direct sum", ffbp_db);
     free(img);
     free(mean);
-    free(fb);
 }
 
 static void test_carried(void)

@@ -120,52 +120,22 @@ static void test_echo_phase(const sasnav_run *run, double tx_, double ty_)
     CHECK(worst_plain > 0.5, "the offsets change nothing (%.2e rad): the test cannot fail", worst_plain);
 }
 
-static double parabola_peak(double a, double b, double c)
-{
-    double den = a - 2.0 * b + c;
-    return den != 0.0 ? 0.5 * (a - c) / den : 0.0;
-}
-
-/* |image| peak: value, sub-pixel position. */
-static double image_peak(const sasnav_grid *g, const sasnav_cfloat *img, double *px, double *py)
-{
-    int best = 0;
-    for (int i = 1; i < g->nx * g->ny; i++)
-        if (cabsf(img[i]) > cabsf(img[best])) best = i;
-    int ix = best % g->nx, iy = best / g->nx;
-    *px = g->x0 + ix * g->dx;
-    *py = g->y0 + iy * g->dy;
-    if (ix > 0 && ix < g->nx - 1)
-        *px += g->dx * parabola_peak(cabsf(img[best - 1]), cabsf(img[best]), cabsf(img[best + 1]));
-    if (iy > 0 && iy < g->ny - 1)
-        *py += g->dy * parabola_peak(cabsf(img[best - g->nx]), cabsf(img[best]), cabsf(img[best + g->nx]));
-    return cabsf(img[best]);
-}
-
 static void test_focus(sasnav_run *run, double tx_, double ty_)
 {
     sasnav_grid g;
     CHECK_OK(sasnav_grid_make(tx_ - 0.0407, tx_ + 0.0393, 41, ty_ - 0.0403, ty_ + 0.0397, 41, &g));
     size_t n = (size_t)g.nx * g.ny;
     sasnav_cfloat *img = malloc(sizeof *img * n), *plain = malloc(sizeof *plain * n);
-    sasnav_cfloat *fb = malloc(sizeof *fb * n);
+    double ffbp_db = test_backproject_ffbp(run, run->truth, &g, img);
     sasnav_op_opts oo;
     sasnav_op_default_opts(&oo);
     oo.nthreads = 1;
-    CHECK_OK(sasnav_backproject(run, run->truth, &g, &oo, img));
-    CHECK_OK(sasnav_ffbp_tile(run, run->truth, &g, 0, g.nx, 0, g.ny, &oo, NULL, fb, NULL, NULL));
     sasnav_ping_pose *off = run->channel_offset;
     run->channel_offset = NULL; /* as if the head had one transmitter */
     CHECK_OK(sasnav_backproject(run, run->truth, &g, &oo, plain));
     run->channel_offset = off;
     double x, y, xp, yp;
-    double peak = image_peak(&g, img, &x, &y), peak_plain = image_peak(&g, plain, &xp, &yp);
-    double e = 0, r = 0;
-    for (size_t i = 0; i < n; i++) {
-        e += pow(cabsf(fb[i] - img[i]), 2);
-        r += pow(cabsf(img[i]), 2);
-    }
-    double ffbp_db = 10 * log10(e / r);
+    double peak = test_image_peak(&g, img, &x, &y), peak_plain = test_image_peak(&g, plain, &xp, &yp);
     printf("focus: peak at (%+.2f, %+.2f) mm from the target; one-Tx image: peak %.3f of it, at (%+.1f, "
            "%+.1f) mm; FFBP vs direct %.1f dB\n",
            1e3 * (x - tx_), 1e3 * (y - ty_), peak_plain / peak, 1e3 * (xp - tx_), 1e3 * (yp - ty_), ffbp_db);
@@ -174,7 +144,6 @@ static void test_focus(sasnav_run *run, double tx_, double ty_)
     CHECK(ffbp_db < -30, "FFBP with channel offsets %.1f dB from the direct sum", ffbp_db);
     free(img);
     free(plain);
-    free(fb);
 }
 
 /* A noise-free 4-ping paper-trajectory run of the two-transmitter head

@@ -5,6 +5,7 @@
 
 #include <stdio.h>
 
+#include "sasnav/image.h"
 #include "sasnav/tank.h"
 
 extern int test_failures;
@@ -44,6 +45,17 @@ sasnav_run *test_tank_run(const sasnav_tank_params *p);
  * centred on the plate, the surge jump before ping jump_ping and 50 clutter
  * points (a lighter scene for quick tests). */
 sasnav_run *test_tank_short_run(int n_pings, int jump_ping);
+
+/* |image| peak of a grid image: its value, and its sub-pixel position
+ * (parabolic fit through the peak and its neighbours along x and y). */
+double test_image_peak(const sasnav_grid *g, const sasnav_cfloat *img, double *px, double *py);
+
+/* Direct backprojection of `run` with poses `nav` on `g` (one thread) into
+ * img, and FFBP of the same into a scratch image: FFBP's error against the
+ * direct sum in dB (10 log10 of the squared-error ratio; 0 on failure,
+ * counted). */
+double test_backproject_ffbp(sasnav_run *run, const sasnav_ping_pose *nav, const sasnav_grid *g,
+                             sasnav_cfloat *img);
 
 /* Field-by-field equality of two systems (memcmp would compare the
  * struct's padding bytes, which copies need not keep). */
