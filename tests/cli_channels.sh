@@ -7,7 +7,8 @@
 # tx_yaw "pairs", no warning; --tx-yaw none warns); DPCA is
 # refused (status 1, a message, no output file); a config whose
 # tx_positions do not match the channels is refused (status 1); a run without
-# transmitters of its own is still written as version 1.
+# transmitters of its own is still written as version 1; per-channel heights
+# (examples/circular_two_mics.yaml) are written as /array/sizes.
 # Usage: sh tests/cli_channels.sh path/to/sasnav
 set -u
 CLI=${1:?usage: cli_channels.sh path/to/sasnav}
@@ -109,6 +110,36 @@ st=$?
 [ $st -eq 1 ] || fail "mismatched tx_positions: status $st, expected 1"
 grep -q "transmitter positions for 4 channels" "$T/bad.err" || { cat "$T/bad.err" >&2; fail "mismatched tx_positions: message"; }
 [ -e "$T/bad.h5" ] && fail "mismatched tx_positions left an output file"
+
+# Channels of their own heights (examples/circular_two_mics.yaml, 4 pings):
+# a version-2 run with /array/sizes holding each microphone's height; a
+# height list of the wrong length is refused (status 1, the key named, no
+# file).
+cp "$HERE/examples/circular_two_mics.yaml" "$T/mics.yaml"
+printf 'trajectory: {n_pings: 4}\n' >> "$T/mics.yaml"
+"$CLI" simulate --preset circular --config "$T/mics.yaml" -o "$T/mics.h5" 2> /dev/null ||
+    fail "simulate with per-channel heights"
+if [ "$HAVE_H5PY" = 1 ] && [ -e "$T/mics.h5" ]; then
+    "$PY" - "$T/mics.h5" <<'EOF' || fail "per-channel heights: file content"
+import sys, h5py, numpy as np
+with h5py.File(sys.argv[1], "r") as f:
+    assert int(f.attrs["format_version"]) == 2, f.attrs["format_version"]
+    z = f["/array/sizes"][...]
+    assert z.shape == (2, 4), z.shape
+    assert np.array_equal(z[:, 2], [0.2195, 0.1885]) and np.all(z[:, 3] == 0.2575), z
+    assert "/channels" not in f
+EOF
+fi
+cat > "$T/badh.yaml" <<'EOF'
+array:
+  n_rx: 4
+  rx_heights: [0.1, 0.2]
+EOF
+"$CLI" simulate --config "$T/badh.yaml" -o "$T/badh.h5" 2> "$T/badh.err"
+st=$?
+[ $st -eq 1 ] || fail "mismatched rx_heights: status $st, expected 1"
+grep -q "rx_heights has 2 values for 4 channels" "$T/badh.err" || { cat "$T/badh.err" >&2; fail "mismatched rx_heights: message"; }
+[ -e "$T/badh.h5" ] && fail "mismatched rx_heights left an output file"
 
 [ "$FAILED" = 0 ] && echo "cli_channels: ok"
 exit "$FAILED"
