@@ -134,12 +134,13 @@ typedef struct {
 static int estimate_pair(const vctx *c, sasnav_pair *est, sasnav_cfloat *dp, sasnav_cfloat *dq,
                          int g, sasnav_virtual_pair *vp)
 {
-    int fp = g * c->stride, fq = ((g + 1) % c->n_groups) * c->stride;
+    int h = (g + 1) % c->n_groups; /* the closed loop's last pair wraps round to group 0 */
+    int fp = g * c->stride, fq = h * c->stride;
     int rc = virtual_data(c->run, fp, c->k, c->m, dp);
     if (!rc) rc = virtual_data(c->run, fq, c->k, c->m, dq);
     if (!rc)
         rc = sasnav_pair_set_data_channels(est, dp, dq, vp->nominal, c->layout_in + (size_t)g * c->nv,
-                                           c->layout_in + (size_t)(g + 1) * c->nv);
+                                           c->layout_in + (size_t)h * c->nv);
     if (!rc) rc = sasnav_pair_estimate(est, &vp->est);
     if (rc) rc = sasnav_prefix_error(rc, "virtual pings at pings %d and %d", fp, fq);
     return rc;
