@@ -111,8 +111,9 @@ typedef struct {
 /* The raw record of microphone `mic` (index) of flight p, minus the
  * background's, into ts (n_samples values). The raw records (and the
  * background's) are checked by the ingest plan first (finite, not
- * clipped). */
-static int flight_record(const sasnav_airsas *rec, const sasnav_airsas *bg, int p, int mic,
+ * clipped). `again`: the scratch already holds flight p (a second
+ * microphone of the same flight), not read a second time. */
+static int flight_record(const sasnav_airsas *rec, const sasnav_airsas *bg, int p, int mic, int again,
                          const sasnav_ingest *check, const flight_scratch *scratch, float *ts)
 {
     size_t n = (size_t)rec->n_samples;
@@ -121,14 +122,14 @@ static int flight_record(const sasnav_airsas *rec, const sasnav_airsas *bg, int 
     if (rec->samples) {
         x = rec->samples + ((size_t)p * rec->n_channels + mic) * n;
     } else {
-        rc = rec->read_flight(rec->flight_ctx, p, scratch->rec);
+        if (!again) rc = rec->read_flight(rec->flight_ctx, p, scratch->rec);
         x = scratch->rec + (size_t)mic * n;
     }
     if (!rc && bg) {
         if (bg->samples) {
             b = bg->samples + ((size_t)p * bg->n_channels + mic) * n;
         } else {
-            rc = bg->read_flight(bg->flight_ctx, p, scratch->bg);
+            if (!again) rc = bg->read_flight(bg->flight_ctx, p, scratch->bg);
             b = scratch->bg + (size_t)mic * n;
         }
     }
@@ -218,7 +219,7 @@ int sasnav_airsas_stream(const sasnav_airsas *rec, const sasnav_airsas *backgrou
      * checked, and their mean (the room response). */
     for (int p = 0; !rc && p < rec->n_pings; p++)
         for (int c = 0; !rc && c < n_mic; c++) {
-            rc = flight_record(rec, background, p, mics[c], plan, &scratch, ts);
+            rc = flight_record(rec, background, p, mics[c], c > 0, plan, &scratch, ts);
             for (size_t m = 0; !rc && o.remove_room && m < n; m++) cm[c * n + m] += ts[m];
         }
     for (size_t m = 0; !rc && o.remove_room && m < n * (size_t)n_mic; m++) cm[m] /= rec->n_pings;
@@ -274,7 +275,7 @@ int sasnav_airsas_stream(const sasnav_airsas *rec, const sasnav_airsas *backgrou
     for (int k = 0; !rc && k < n_keep; k++) {
         int p = o.first_ping + k * o.ping_stride;
         for (int c = 0; !rc && c < n_mic; c++) {
-            rc = flight_record(rec, background, p, mics[c], plan, &scratch, ts);
+            rc = flight_record(rec, background, p, mics[c], c > 0, plan, &scratch, ts);
             if (!rc && o.remove_room) remove_room_record((int)n, cm + c * n, ts);
             if (!rc) {
                 rc = sasnav_ingest_execute(plan, 1, ts, out + (size_t)c * (size_t)hdr.win.n_samples);
