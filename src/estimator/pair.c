@@ -283,7 +283,11 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
     }
     if (!(o->coarse_pixel > 0)) o->coarse_pixel = 2.0 * o->pixel;
     double lambda = sasnav_wavelength(sys);
-    double dmax = array->rx_length > array->tx_length ? array->rx_length : array->tx_length;
+    double dmax = 0.0; /* the largest aperture over the channels */
+    for (int l = 0; l < (array->per_channel ? array->n_rx : 1); l++) {
+        sasnav_channel_size z = sasnav_array_channel_size(array, l);
+        dmax = fmax(dmax, fmax(z.rx_length, z.tx_length));
+    }
     if (!(o->cross_extent > 0)) {
         /* 80 % of the along-track footprint between the first nulls of the
          * element beam at the grid's range (1.6 m in paper-pair). Echoes
