@@ -40,6 +40,7 @@
 #include "sasnav/error.h"
 #include "sasnav/navigate.h"
 #include "sasnav/sim.h"
+#include "bench_stats.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -54,23 +55,6 @@ typedef struct {
     double *final_sway, *final_surge, *final_yaw, *rms_sway;
     int slips, unflagged, flagged, pairs, within;
 } stats;
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-/* Percentile (0..100) of n values by linear interpolation (sorts v). */
-static double percentile(double *v, int n, double pc)
-{
-    if (n < 1) return NAN;
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    double r = pc / 100.0 * (n - 1);
-    int i = (int)floor(r);
-    if (i >= n - 1) return v[n - 1];
-    return v[i] + (r - i) * (v[i + 1] - v[i]);
-}
 
 int main(int argc, char **argv)
 {

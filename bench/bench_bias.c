@@ -1,0 +1,268 @@
+/* Where the pair estimator's errors come from (docs/estimator.md, "What the
+ * remaining errors are not"): the pairs of seeded paper-trajectory runs
+ * (true bistatic Tx and array poses, as `sasnav simulate --preset
+ * paper-trajectory --seed S`) estimated each alone with four models of the
+ * pings' Tx-array geometry, on the same data:
+ *   fixed  the EPCA model with the run's fixed Tx-array offset (what
+ *          `sasnav navigate --no-aiding` uses)
+ *   lags   the EPCA model with each ping's true offset (an oracle of what
+ *          the speed-scaled offsets estimate, docs/navigation.md)
+ *   yaw    the same plus each ping's true Tx yaw relative to its array
+ *   full   each ping's true Tx and array poses in its centroid frame (an
+ *          oracle: nothing of the geometry left to model)
+ * With `full` and `--snr inf` what remains is the criterion's own error on
+ * this scene: not noise, not the geometry.
+ *
+ * usage: bench_bias [--seeds S0 N] [--snr DB|inf] [--models fixed,lags,yaw,full]
+ *                   [--range-extent M] [--cross-extent M] [--error-extent M]
+ *                   [--k K] [--i I] [--threads T] [--quiet]
+ *
+ * Seeds follow `sasnav simulate --seed S` (scene 3S+1, trajectory 3S+2,
+ * noise 3S+3). Pairs run in parallel (one estimator per thread, one
+ * thread each): the same bits for any thread count. Prints each pair's
+ * error (surge mm, sway mm, yaw rad) per model, then per model and over
+ * all pairs: rms, median and 95th percentile of |error|, and the final
+ * sway that the per-pair errors alone give each run (the estimated
+ * displacements composed from the first ping against the true ones,
+ * expressed in the first ping's frame; no resolution, no alignment:
+ * the "paper" way) with the runs within lambda/25. For independent
+ * per-pair yaw errors of rms s over n pairs of step L the final sway has
+ * an rms of s L sqrt(sum_{k<n} k^2) (6.4 m x s for paper-trajectory);
+ * printed as "yaw-only prediction". */
+#include "sasnav/error.h"
+#include "sasnav/estimator.h"
+#include "sasnav/geometry.h"
+#include "sasnav/model.h"
+#include "sasnav/run.h"
+#include "sasnav/sim.h"
+#include "bench_stats.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum { G_FIXED, G_LAGS, G_YAW, G_FULL, N_MODELS };
+static const char *const model_names[N_MODELS] = {"fixed", "lags", "yaw", "full"};
+
+/* Channel geometries of one ping for model m (local: the true local ping). */
+static sasnav_ping_pose model_local(int m, const sasnav_ping_pose *local)
+{
+    double lag = local->array.x - local->tx.x;
+    if (m == G_YAW) return sasnav_epca_local(lag, local->tx.theta - local->array.theta);
+    return *local;
+}
+
+static int estimate(const sasnav_run *run, const sasnav_pair_opts *po, int m, int p, sasnav_pose *err,
+                    int *verdict)
+{
+    int q = p + 1;
+    sasnav_pair *pr = NULL;
+    int rc = sasnav_pair_create(&run->sys, &run->array, &run->win, po, &pr);
+    if (rc) return rc;
+    const sasnav_cfloat *dp = sasnav_run_ping(run, p), *dq = sasnav_run_ping(run, q);
+    sasnav_pose nominal = sasnav_ping_displacement(&run->nav[p], &run->nav[q]);
+    sasnav_ping_pose lp = sasnav_ping_local(&run->truth[p]), lq = sasnav_ping_local(&run->truth[q]);
+    if (m == G_FIXED) rc = sasnav_pair_set_data_lags(pr, dp, dq, nominal, run->tx_lag, run->tx_lag);
+    else if (m == G_LAGS)
+        rc = sasnav_pair_set_data_lags(pr, dp, dq, nominal, lp.array.x - lp.tx.x, lq.array.x - lq.tx.x);
+    else {
+        sasnav_ping_pose cp[SASNAV_MAX_RX], cq[SASNAV_MAX_RX];
+        sasnav_ping_pose a = model_local(m, &lp), b = model_local(m, &lq);
+        for (int l = 0; l < run->array.n_rx; l++) {
+            cp[l] = a;
+            cq[l] = b;
+        }
+        rc = sasnav_pair_set_data_channels(pr, dp, dq, nominal, cp, cq);
+    }
+    sasnav_pair_result res;
+    if (!rc) rc = sasnav_pair_estimate(pr, &res);
+    sasnav_pair_destroy(pr);
+    if (rc) return rc;
+    sasnav_pose t = sasnav_ping_displacement(&run->truth[p], &run->truth[q]);
+    *err = (sasnav_pose){res.displacement.x - t.x, res.displacement.y - t.y,
+                         res.displacement.theta - t.theta};
+    *verdict = res.verdict;
+    return SASNAV_OK;
+}
+
+static int parse_models(const char *s, int *use)
+{
+    for (int m = 0; m < N_MODELS; m++) use[m] = 0;
+    char buf[256];
+    snprintf(buf, sizeof buf, "%s", s);
+    for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+        int found = 0;
+        for (int m = 0; m < N_MODELS; m++)
+            if (!strcmp(tok, model_names[m])) use[m] = found = 1;
+        if (!found) return 0;
+    }
+    return 1;
+}
+
+static void usage(void)
+{
+    fprintf(stderr, "usage: bench_bias [--seeds S0 N] [--snr DB|inf] [--models fixed,lags,yaw,full]\n"
+                    "                  [--range-extent M] [--cross-extent M] [--error-extent M]\n"
+                    "                  [--k K] [--i I] [--threads T] [--quiet]\n");
+}
+
+int main(int argc, char **argv)
+{
+    long s0 = 101, ns = 3;
+    double snr = 30.0;
+    int use[N_MODELS] = {1, 1, 1, 1}, threads = 0, quiet = 0;
+    sasnav_pair_opts po;
+    sasnav_pair_default_opts(&po);
+    for (int a = 1; a < argc; a++) {
+        if (!strcmp(argv[a], "--seeds") && a + 2 < argc) {
+            s0 = atol(argv[++a]);
+            ns = atol(argv[++a]);
+        } else if (!strcmp(argv[a], "--snr") && a + 1 < argc) {
+            a++;
+            snr = !strcmp(argv[a], "inf") ? INFINITY : atof(argv[a]);
+        } else if (!strcmp(argv[a], "--models") && a + 1 < argc) {
+            if (!parse_models(argv[++a], use)) {
+                usage();
+                return 2;
+            }
+        } else if (!strcmp(argv[a], "--range-extent") && a + 1 < argc) po.range_extent = atof(argv[++a]);
+        else if (!strcmp(argv[a], "--cross-extent") && a + 1 < argc) po.cross_extent = atof(argv[++a]);
+        else if (!strcmp(argv[a], "--error-extent") && a + 1 < argc) po.error_extent = atof(argv[++a]);
+        else if (!strcmp(argv[a], "--k") && a + 1 < argc) po.k = atoi(argv[++a]);
+        else if (!strcmp(argv[a], "--i") && a + 1 < argc) po.i = atoi(argv[++a]);
+        else if (!strcmp(argv[a], "--threads") && a + 1 < argc) threads = atoi(argv[++a]);
+        else if (!strcmp(argv[a], "--quiet")) quiet = 1;
+        else {
+            usage();
+            return 2;
+        }
+    }
+    if (ns < 1 || ns > 10000 || !(po.range_extent > 0) || po.k < 1 || po.i < 1) {
+        usage();
+        return 2;
+    }
+    if (threads > 0) omp_set_num_threads(threads);
+    po.nthreads = 1;
+    const int max_pairs = 64;
+    size_t cap = (size_t)ns * max_pairs;
+    double *e[N_MODELS][3], *final_sway[N_MODELS];
+    int n_err[N_MODELS] = {0}, n_runs = 0, within[N_MODELS] = {0}, not_ok[N_MODELS] = {0};
+    for (int m = 0; m < N_MODELS; m++) {
+        for (int c = 0; c < 3; c++) e[m][c] = malloc(cap * sizeof(double));
+        final_sway[m] = malloc((size_t)ns * sizeof(double));
+        if (!e[m][0] || !e[m][1] || !e[m][2] || !final_sway[m]) return 1;
+    }
+    double lambda = 0, step = 0;
+    printf("paper-trajectory, SNR %g dB, seeds %ld..%ld, k = %d, i = %d, range extent %g m, "
+           "cross extent %g m (0 = auto), error extent %g m (0 = the grid)\n",
+           snr, s0, s0 + ns - 1, po.k, po.i, po.range_extent, po.cross_extent, po.error_extent);
+    for (long s = s0; s < s0 + ns; s++) {
+        sasnav_scenario sc;
+        sasnav_scenario_preset("paper-trajectory", &sc);
+        sc.snr_db = snr;
+        sc.ripples.seed = (uint64_t)s * 3 + 1;
+        sc.traj.seed = (uint64_t)s * 3 + 2;
+        sc.noise_seed = (uint64_t)s * 3 + 3;
+        sasnav_run *run = NULL;
+        if (sasnav_simulate(&sc, NULL, NULL, &run)) {
+            fprintf(stderr, "bench_bias: simulate: %s\n", sasnav_last_error());
+            return 1;
+        }
+        int np = run->n_pings - 1;
+        if (np > max_pairs || !run->truth) {
+            fprintf(stderr, "bench_bias: unexpected run (%d pairs)\n", np);
+            return 1;
+        }
+        lambda = sasnav_wavelength(&run->sys);
+        step = run->ping_spacing;
+        sasnav_pair_opts o = po;
+        o.range = run->range_of_interest;
+        o.tx_lag = run->tx_lag;
+        sasnav_pose err[64][N_MODELS];
+        int verdict[64][N_MODELS], rc = SASNAV_OK;
+#pragma omp parallel for schedule(dynamic, 1)
+        for (int t = 0; t < np * N_MODELS; t++) {
+            int p = t / N_MODELS, m = t % N_MODELS;
+            if (!use[m]) continue;
+            int r = estimate(run, &o, m, p, &err[p][m], &verdict[p][m]);
+            if (r) {
+#pragma omp critical(bench_bias_error)
+                {
+                    if (!rc) fprintf(stderr, "bench_bias: seed %ld pair %d: %s\n", s, p, sasnav_last_error());
+                    rc = r;
+                }
+            }
+        }
+        if (rc) return 1;
+        for (int m = 0; m < N_MODELS; m++) {
+            if (!use[m]) continue;
+            /* Compose the estimated and the true displacements from the
+             * first ping's centroid. */
+            sasnav_pose est = {0, 0, 0}, tru = {0, 0, 0};
+            for (int p = 0; p < np; p++) {
+                sasnav_pose t = sasnav_ping_displacement(&run->truth[p], &run->truth[p + 1]);
+                sasnav_pose d = {t.x + err[p][m].x, t.y + err[p][m].y, t.theta + err[p][m].theta};
+                est = sasnav_pose_compose(est, d);
+                tru = sasnav_pose_compose(tru, t);
+                e[m][0][n_err[m]] = err[p][m].x;
+                e[m][1][n_err[m]] = err[p][m].y;
+                e[m][2][n_err[m]] = err[p][m].theta;
+                n_err[m]++;
+                not_ok[m] += verdict[p][m] != SASNAV_VERDICT_OK;
+            }
+            final_sway[m][n_runs] = est.y - tru.y;
+            within[m] += fabs(est.y - tru.y) <= lambda / 25.0;
+        }
+        if (!quiet)
+            for (int p = 0; p < np; p++) {
+                printf("%5ld %2d", s, p);
+                for (int m = 0; m < N_MODELS; m++)
+                    if (use[m])
+                        printf(" | %s %+7.3f %+8.4f %+9.2e", model_names[m], 1e3 * err[p][m].x,
+                               1e3 * err[p][m].y, err[p][m].theta);
+                printf("\n");
+            }
+        printf("%5ld final sway (mm):", s);
+        for (int m = 0; m < N_MODELS; m++)
+            if (use[m]) printf(" %s %+.3f", model_names[m], 1e3 * final_sway[m][n_runs]);
+        printf("\n");
+        fflush(stdout);
+        n_runs++;
+        sasnav_run_free(run);
+    }
+    int n_pairs = n_err[0] > 0 ? n_err[0] : n_err[1] > 0 ? n_err[1] : n_err[2] > 0 ? n_err[2] : n_err[3];
+    double sumk2 = 0;
+    for (int k = 1; k <= n_pairs / (n_runs > 0 ? n_runs : 1); k++) sumk2 += (double)(k - 1) * (k - 1);
+    printf("\n| model | pairs | not ok | surge mm rms / median / p95 | sway microns rms / median / p95 | "
+           "yaw rad rms / median / p95 | final sway mm median / p95 | within lambda/25 | yaw-only "
+           "prediction of final sway rms (mm) |\n|---|---|---|---|---|---|---|---|---|\n");
+    for (int m = 0; m < N_MODELS; m++) {
+        if (!use[m]) continue;
+        int n = n_err[m];
+        double rms[3], med[3], p95[3];
+        for (int c = 0; c < 3; c++) {
+            double s2 = 0;
+            for (int j = 0; j < n; j++) {
+                s2 += e[m][c][j] * e[m][c][j];
+                e[m][c][j] = fabs(e[m][c][j]);
+            }
+            rms[c] = sqrt(s2 / n);
+            med[c] = percentile(e[m][c], n, 50);
+            p95[c] = percentile(e[m][c], n, 95);
+        }
+        for (int r = 0; r < n_runs; r++) final_sway[m][r] = fabs(final_sway[m][r]);
+        double fs50 = percentile(final_sway[m], n_runs, 50), fs95 = percentile(final_sway[m], n_runs, 95);
+        printf("| %s | %d | %d | %.3f / %.3f / %.3f | %.1f / %.1f / %.1f | %.2e / %.2e / %.2e | %.3f / "
+               "%.3f | %d of %d | %.3f |\n",
+               model_names[m], n, not_ok[m], 1e3 * rms[0], 1e3 * med[0], 1e3 * p95[0], 1e6 * rms[1],
+               1e6 * med[1], 1e6 * p95[1], rms[2], med[2], p95[2], 1e3 * fs50, 1e3 * fs95, within[m],
+               n_runs, 1e3 * rms[2] * step * sqrt(sumk2));
+    }
+    for (int m = 0; m < N_MODELS; m++) {
+        for (int c = 0; c < 3; c++) free(e[m][c]);
+        free(final_sway[m]);
+    }
+    return 0;
+}
