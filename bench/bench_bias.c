@@ -35,7 +35,7 @@
 #include "sasnav/model.h"
 #include "sasnav/run.h"
 #include "sasnav/sim.h"
-#include "bench_stats.h"
+#include "bench_util.h"
 
 #include <math.h>
 #include <omp.h>
@@ -116,13 +116,8 @@ int main(int argc, char **argv)
     sasnav_pair_opts po;
     sasnav_pair_default_opts(&po);
     for (int a = 1; a < argc; a++) {
-        if (!strcmp(argv[a], "--seeds") && a + 2 < argc) {
-            s0 = atol(argv[++a]);
-            ns = atol(argv[++a]);
-        } else if (!strcmp(argv[a], "--snr") && a + 1 < argc) {
-            a++;
-            snr = !strcmp(argv[a], "inf") ? INFINITY : atof(argv[a]);
-        } else if (!strcmp(argv[a], "--models") && a + 1 < argc) {
+        if (bench_seed_option(argc, argv, &a, &s0, &ns, &snr)) continue;
+        if (!strcmp(argv[a], "--models") && a + 1 < argc) {
             if (!parse_models(argv[++a], use)) {
                 usage();
                 return 2;
@@ -159,17 +154,8 @@ int main(int argc, char **argv)
            "cross extent %g m (0 = auto), error extent %g m (0 = the grid)\n",
            snr, s0, s0 + ns - 1, po.k, po.i, po.range_extent, po.cross_extent, po.error_extent);
     for (long s = s0; s < s0 + ns; s++) {
-        sasnav_scenario sc;
-        sasnav_scenario_preset("paper-trajectory", &sc);
-        sc.snr_db = snr;
-        sc.ripples.seed = (uint64_t)s * 3 + 1;
-        sc.traj.seed = (uint64_t)s * 3 + 2;
-        sc.noise_seed = (uint64_t)s * 3 + 3;
-        sasnav_run *run = NULL;
-        if (sasnav_simulate(&sc, NULL, NULL, &run)) {
-            fprintf(stderr, "bench_bias: simulate: %s\n", sasnav_last_error());
-            return 1;
-        }
+        sasnav_run *run = bench_trajectory_run(s, snr, 0);
+        if (!run) return 1;
         int np = run->n_pings - 1;
         if (np > max_pairs || !run->truth) {
             fprintf(stderr, "bench_bias: unexpected run (%d pairs)\n", np);

@@ -14,6 +14,7 @@
 #include "sasnav/error.h"
 #include "sasnav/navigate.h"
 #include "sasnav/sim.h"
+#include "bench_util.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -41,13 +42,8 @@ int main(int argc, char **argv)
     double snr = 30.0;
     int threads[MAX_T] = {1, 2}, nt = 2;
     for (int a = 1; a < argc; a++) {
-        if (!strcmp(argv[a], "--seeds") && a + 2 < argc) {
-            s0 = atol(argv[++a]);
-            ns = atol(argv[++a]);
-        } else if (!strcmp(argv[a], "--snr") && a + 1 < argc) {
-            a++;
-            snr = !strcmp(argv[a], "inf") ? INFINITY : atof(argv[a]);
-        } else if (!strcmp(argv[a], "--threads") && a + 1 < argc) {
+        if (bench_seed_option(argc, argv, &a, &s0, &ns, &snr)) continue;
+        if (!strcmp(argv[a], "--threads") && a + 1 < argc) {
             nt = 0;
             for (char *p = argv[++a]; *p && nt < MAX_T;) {
                 threads[nt++] = (int)strtol(p, &p, 10);
@@ -65,17 +61,8 @@ int main(int argc, char **argv)
            "at once", "final sway mm", "identical");
     int bad = 0;
     for (long s = s0; s < s0 + ns; s++) {
-        sasnav_scenario sc;
-        sasnav_scenario_preset("paper-trajectory", &sc);
-        sc.snr_db = snr;
-        sc.ripples.seed = (uint64_t)s * 3 + 1;
-        sc.traj.seed = (uint64_t)s * 3 + 2;
-        sc.noise_seed = (uint64_t)s * 3 + 3;
-        sasnav_run *run = NULL;
-        if (sasnav_simulate(&sc, NULL, NULL, &run)) {
-            fprintf(stderr, "simulate: %s\n", sasnav_last_error());
-            return 1;
-        }
+        sasnav_run *run = bench_trajectory_run(s, snr, 0);
+        if (!run) return 1;
         sasnav_navigation first;
         memset(&first, 0, sizeof first);
         for (int t = 0; t < nt; t++) {

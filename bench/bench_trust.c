@@ -40,7 +40,7 @@
 #include "sasnav/error.h"
 #include "sasnav/navigate.h"
 #include "sasnav/sim.h"
-#include "bench_stats.h"
+#include "bench_util.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -65,13 +65,8 @@ int main(int argc, char **argv)
     double aiding_bias = 4e-4;
     const char *pairs_path = NULL;
     for (int a = 1; a < argc; a++) {
-        if (!strcmp(argv[a], "--seeds") && a + 2 < argc) {
-            s0 = atol(argv[++a]);
-            ns = atol(argv[++a]);
-        } else if (!strcmp(argv[a], "--snr") && a + 1 < argc) {
-            a++;
-            snr = !strcmp(argv[a], "inf") ? INFINITY : atof(argv[a]);
-        } else if (!strcmp(argv[a], "--threads") && a + 1 < argc) {
+        if (bench_seed_option(argc, argv, &a, &s0, &ns, &snr)) continue;
+        if (!strcmp(argv[a], "--threads") && a + 1 < argc) {
             threads = atoi(argv[++a]);
         } else if (!strcmp(argv[a], "--aiding-bias") && a + 1 < argc) {
             aiding_bias = atof(argv[++a]);
@@ -128,19 +123,8 @@ int main(int argc, char **argv)
            "flagged", "final sway mm", "final surge mm", "final yaw", "s/pair");
     for (long s = s0; s < s0 + ns; s++) {
         int r = (int)(s - s0);
-        sasnav_scenario sc;
-        sasnav_scenario_preset("paper-trajectory", &sc);
-        sc.snr_db = snr;
-        sc.ripples.seed = (uint64_t)s * 3 + 1;
-        sc.traj.seed = (uint64_t)s * 3 + 2;
-        sc.noise_seed = (uint64_t)s * 3 + 3;
-        sc.aiding.enabled = 1;
-        sc.aiding.seed = (uint64_t)s * 3 + 4;
-        sasnav_run *run = NULL;
-        if (sasnav_simulate(&sc, NULL, NULL, &run)) {
-            fprintf(stderr, "simulate: %s\n", sasnav_last_error());
-            return 1;
-        }
+        sasnav_run *run = bench_trajectory_run(s, snr, 1);
+        if (!run) return 1;
         sasnav_navigation nav[N_METHODS];
         memset(nav, 0, sizeof nav);
         int order[N_METHODS] = {M_SUB, M_PAPER, M_FUSED, M_FUSED_BIAS, M_DPCA, M_AID, M_SUB_LAGS, M_FUSED_LAGS};

@@ -42,6 +42,7 @@
 #include "sasnav/sim.h"
 #include "sasnav/trajectory.h"
 #include "sasnav/virtual.h"
+#include "bench_util.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -227,13 +228,8 @@ int main(int argc, char **argv)
     const char *file = NULL, *write_prefix = NULL, *plot_prefix = NULL;
     refine_cfg rf = {0, 0, 4, 0, 0.0025, 0.3, 0.012, 0.006, 0};
     for (int a = 1; a < argc; a++) {
-        if (!strcmp(argv[a], "--seeds") && a + 2 < argc) {
-            s0 = atol(argv[++a]);
-            ns = atol(argv[++a]);
-        } else if (!strcmp(argv[a], "--snr") && a + 1 < argc) {
-            a++;
-            snr = !strcmp(argv[a], "inf") ? INFINITY : atof(argv[a]);
-        } else if (!strcmp(argv[a], "--k") && a + 1 < argc) {
+        if (bench_seed_option(argc, argv, &a, &s0, &ns, &snr)) continue;
+        if (!strcmp(argv[a], "--k") && a + 1 < argc) {
             k = atoi(argv[++a]);
         } else if (!strcmp(argv[a], "--stride") && a + 1 < argc) {
             stride = atoi(argv[++a]);
