@@ -17,6 +17,7 @@
  * usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE]
  *                    [--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows]
  *                    [--fused-lags] [--sub-lags] [--methods M1,M2,...]
+ *                    [--k K] [--i I]
  *
  * Seeds follow `sasnav simulate --seed S --aiding` (scene 3S+1, trajectory
  * 3S+2, noise 3S+3, aiding 3S+4). Prints one line per run and method, then
@@ -36,7 +37,8 @@
  * with the aiding-bias term: fused+bias with the offsets); --fused-lags adds
  * fused+lags only, --sub-lags sub+lags only. --methods runs only the
  * named rows (e.g. `--methods fused+lags,aiding`: the default fusion and
- * dead reckoning, half the time of all rows). */
+ * dead reckoning, half the time of all rows). --k, --i set the subspace
+ * estimator's final-stage iterations (default the estimator's 8, 8). */
 #include "sasnav/error.h"
 #include "sasnav/navigate.h"
 #include "sasnav/sim.h"
@@ -60,7 +62,7 @@ int main(int argc, char **argv)
 {
     long s0 = 1001, ns = 10;
     double snr = 30.0;
-    int threads = 0, speed_lags = 0;
+    int threads = 0, speed_lags = 0, k_final = 0, i_final = 0;
     int use[N_METHODS] = {1, 1, 1, 1, 1, 1, 0, 0}; /* the methods run */
     double aiding_bias = 4e-4;
     const char *pairs_path = NULL;
@@ -95,14 +97,18 @@ int main(int argc, char **argv)
             if (use[M_PAPER] || use[M_FUSED] || use[M_FUSED_BIAS]) use[M_SUB] = 1;
         } else if (!strcmp(argv[a], "--pairs") && a + 1 < argc) {
             pairs_path = argv[++a];
+        } else if (!strcmp(argv[a], "--k") && a + 1 < argc) {
+            k_final = atoi(argv[++a]);
+        } else if (!strcmp(argv[a], "--i") && a + 1 < argc) {
+            i_final = atoi(argv[++a]);
         } else {
             fprintf(stderr, "usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE] "
                             "[--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows] [--fused-lags] [--sub-lags] "
-                            "[--methods M1,M2,...]\n");
+                            "[--methods M1,M2,...] [--k K] [--i I]\n");
             return 2;
         }
     }
-    if (ns < 1 || threads < 0 || speed_lags < 0 || speed_lags > 2) return 2;
+    if (ns < 1 || threads < 0 || speed_lags < 0 || speed_lags > 2 || k_final < 0 || i_final < 0) return 2;
     FILE *pf = pairs_path ? fopen(pairs_path, "w") : NULL;
     if (pairs_path && !pf) {
         fprintf(stderr, "bench_trust: cannot write %s\n", pairs_path);
@@ -134,6 +140,8 @@ int main(int argc, char **argv)
             sasnav_navigate_opts o;
             sasnav_navigate_default_opts(&o);
             o.nthreads = threads;
+            if (k_final > 0) o.pair.k = k_final;
+            if (i_final > 0) o.pair.i = i_final;
             o.use_aiding = m == M_FUSED || m == M_FUSED_BIAS || m == M_AID || m == M_FUSED_LAGS;
             o.resolve = m != M_PAPER;
             if (m == M_PAPER || m == M_FUSED || m == M_FUSED_BIAS) o.reuse = &nav[M_SUB];
