@@ -113,8 +113,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --json            machine-readable output
     --k K, --i I      CGLS and alternating-projection iterations of the
                       final stage (default 8, 8; the paper's 5, 5 are 1.5x
-                      faster and as often within the paper's bounds on
-                      held-out draws: docs/estimator.md)
+                      faster, with larger surge errors: docs/estimator.md)
     --prior S,W,Y     prior motion error (default 0,0,0)
     --surge-sigma S   scale of a prior on the surge error (m; the nominal
                       step's accuracy, e.g. a plotter's; default none): ranks
