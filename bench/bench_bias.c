@@ -144,6 +144,7 @@ int main(int argc, char **argv)
     size_t cap = (size_t)ns * max_pairs;
     double *e[N_MODELS][3], *final_sway[N_MODELS];
     int n_err[N_MODELS] = {0}, n_runs = 0, within[N_MODELS] = {0}, not_ok[N_MODELS] = {0};
+    int pairs_per_run = 0; /* the same for every seed of the preset */
     for (int m = 0; m < N_MODELS; m++) {
         for (int c = 0; c < 3; c++) e[m][c] = malloc(cap * sizeof(double));
         final_sway[m] = malloc((size_t)ns * sizeof(double));
@@ -157,6 +158,7 @@ int main(int argc, char **argv)
         sasnav_run *run = bench_trajectory_run(s, snr, 0);
         if (!run) return 1;
         int np = run->n_pings - 1;
+        pairs_per_run = np;
         if (np > max_pairs || !run->truth) {
             fprintf(stderr, "bench_bias: unexpected run (%d pairs)\n", np);
             return 1;
@@ -218,9 +220,8 @@ int main(int argc, char **argv)
         n_runs++;
         sasnav_run_free(run);
     }
-    int n_pairs = n_err[0] > 0 ? n_err[0] : n_err[1] > 0 ? n_err[1] : n_err[2] > 0 ? n_err[2] : n_err[3];
-    double sumk2 = 0;
-    for (int k = 1; k <= n_pairs / (n_runs > 0 ? n_runs : 1); k++) sumk2 += (double)(k - 1) * (k - 1);
+    double sumk2 = 0; /* sum_{k < n} k^2 over a run's n pairs */
+    for (int k = 0; k < pairs_per_run; k++) sumk2 += (double)k * k;
     printf("\n| model | pairs | not ok | surge mm rms / median / p95 | sway microns rms / median / p95 | "
            "yaw rad rms / median / p95 | final sway mm median / p95 | within lambda/25 | yaw-only "
            "prediction of final sway rms (mm) |\n|---|---|---|---|---|---|---|---|---|\n");
