@@ -3,7 +3,9 @@
  *
  * Solves min ||T x - d||^2 + lambda ||x||^2 from x = 0 (CGLS of Hestenes and
  * Stiefel applied to the normal equations; the iterate after k steps is the
- * truncated pseudo-inverse of the paper). */
+ * truncated pseudo-inverse of the paper). k iterations cost 2k operator
+ * applications: T^H once, then T and T^H per iteration, except the last
+ * iteration's T^H (it only prepares a next direction). */
 #include "sasnav/error.h"
 #include "sasnav/image.h"
 
@@ -62,6 +64,9 @@ int sasnav_cgls(sasnav_op *op, const sasnav_cfloat *data, const sasnav_cgls_opts
         if (!(delta > 0)) break;
         float alpha = (float)(gamma / delta);
         for (size_t i = 0; i < np; i++) x[i] += alpha * p[i];
+        /* The last iterate is complete: the next direction (T^H r) would
+         * never be used, and skipping it leaves x exactly the same. */
+        if (it == o.iterations - 1) break;
         for (size_t i = 0; i < nd; i++) r[i] -= alpha * q[i];
         rc = sasnav_op_adjoint(op, r, s);
         if (rc) goto done;
