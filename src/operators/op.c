@@ -164,6 +164,17 @@ static void spread_flush(spread_run *run, int wpad, float *re, float *im)
         const int32_t *restrict index = op->index + q0;                                    \
         const float *restrict green = op->green + 2 * q0;                                  \
         const float *restrict taps = op->taps + q0 * W;                                    \
+        /* G rho of the block's points first, in a loop across points that   \
+         * vectorises (inside the run loop it was a scalar complex product     \
+         * per pair and the loop's largest cost: bench_op 1.35x forward). */   \
+        float c_r[BLOCK], c_i[BLOCK];                                                      \
+        _Pragma("omp simd") for (int k = 0; k < count; k++)                                \
+        {                                                                                  \
+            float gr = green[2 * k], gi = green[2 * k + 1];                                \
+            float rr = rho_f[2 * (n0 + k)], ri = rho_f[2 * (n0 + k) + 1];                  \
+            c_r[k] = gr * rr - gi * ri;                                                    \
+            c_i[k] = gr * ri + gi * rr;                                                    \
+        }                                                                                  \
         float acc_r[W], acc_i[W];                                                          \
         for (int j = 0; j < W; j++) {                                                      \
             acc_r[j] = run->re[j];                                                         \
@@ -180,9 +191,7 @@ static void spread_flush(spread_run *run, int wpad, float *re, float *im)
                 }                                                                          \
                 first = index[i];                                                          \
             }                                                                              \
-            float gr = green[2 * i], gi = green[2 * i + 1];                                \
-            float rr = rho_f[2 * (n0 + i)], ri = rho_f[2 * (n0 + i) + 1];                  \
-            float cr = gr * rr - gi * ri, ci = gr * ri + gi * rr;                          \
+            float cr = c_r[i], ci = c_i[i];                                                \
             const float *restrict t = taps + (size_t)i * W;                                \
             _Pragma("omp simd") for (int j = 0; j < W; j++)                                \
             {                                                                              \
