@@ -166,7 +166,7 @@ static void spread_flush(spread_run *run, int wpad, float *re, float *im)
         const float *restrict taps = op->taps + q0 * W;                                    \
         /* G rho of the block's points first, in a loop across points that   \
          * vectorises (inside the run loop it was a scalar complex product     \
-         * per pair and the loop's largest cost: bench_op 1.35x forward). */   \
+         * per pair and the loop's largest cost: bench_op 1.14-1.21x forward). */ \
         float c_r[BLOCK], c_i[BLOCK];                                                      \
         _Pragma("omp simd") for (int k = 0; k < count; k++)                                \
         {                                                                                  \
