@@ -20,7 +20,7 @@ static const char *help =
     "                       [--cross-extent M] [--range-extent M]\n"
     "                       [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]\n"
     "                       [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]\n"
-    "                       [--threads N] [--json] [--checkpoint FILE]\n"
+    "                       [--threads N] [--gpu] [--json] [--checkpoint FILE]\n"
     "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
     "       sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]\n"
     "                       [--iterations N] [--closed] [--keep-length]\n"
@@ -93,6 +93,9 @@ static const char *help =
     "                    the written navigation then images on the truth's grid)\n"
     "  --threads N       OpenMP threads (default: all cores); with several, pairs\n"
     "                    are estimated concurrently (same results, bit for bit)\n"
+    "  --gpu             the pairs' error evaluations on a CUDA GPU (builds\n"
+    "                    configured with -DSASNAV_CUDA=ON; the same estimates to\n"
+    "                    float rounding: docs/estimator.md, \"GPU\")\n"
     "  --checkpoint FILE  keep every pair estimate in FILE as it is made; if the\n"
     "                    command is interrupted (Ctrl-C, kill, a crash), the same\n"
     "                    command resumes from FILE and gives the same result\n"
@@ -450,7 +453,7 @@ int cmd_navigate(int argc, char **argv)
         {"virtual-array", required_argument, 0, 'V'}, {"stride", required_argument, 0, 'T'},
         {"iterations", required_argument, 0, 'I'}, {"estimate-yaw", no_argument, 0, 'W'},
         {"interleave", required_argument, 0, 'G'}, {"closed", no_argument, 0, 'Z'},
-        {"keep-length", no_argument, 0, 'K'},
+        {"keep-length", no_argument, 0, 'K'}, {"gpu", no_argument, 0, 'g'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -517,6 +520,7 @@ int cmd_navigate(int argc, char **argv)
             break;
         case 'A': anchor_truth = 1; break;
         case 'F': no.pair.fix_yaw = 1; break;
+        case 'g': no.pair.gpu = 1; break;
         case 'X':
             if (cli_parse_double(optarg, &no.pair.cross_extent) || !(no.pair.cross_extent > 0))
                 return cli_usage("navigate", "--cross-extent needs a positive length (m)");

@@ -16,7 +16,7 @@ static const char *help =
     "                   [--prior S,W,Y] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
     "                   [--cross-extent M] [--range-extent M]\n"
     "                   [--no-global] [--subintervals N]\n"
-    "                   [--range R] [--lag-model fixed|motion] [--threads N]\n"
+    "                   [--range R] [--lag-model fixed|motion] [--threads N] [--gpu]\n"
     "\n"
     "Estimates the motion error (displacement minus nominal) of ping q relative\n"
     "to ping p: surge and sway in metres, yaw in radians. Without --p/--q the\n"
@@ -45,7 +45,10 @@ static const char *help =
     "  --lag-model M     Tx-array offset per sub-interval: 'fixed' (the run's\n"
     "                    tx_lag, default) or 'motion' (speed x 2 R / c at the\n"
     "                    sub-interval's centre range R)\n"
-    "  --threads N       OpenMP threads\n";
+    "  --threads N       OpenMP threads\n"
+    "  --gpu             the error evaluations on a CUDA GPU (builds configured\n"
+    "                    with -DSASNAV_CUDA=ON; the same estimates to float\n"
+    "                    rounding: docs/estimator.md, \"GPU\")\n";
 
 typedef struct {
     double range, tx_lag;
@@ -76,10 +79,10 @@ int cmd_pair(int argc, char **argv)
         {"lag-model", required_argument, 0, 'L'}, {"box", required_argument, 0, 'b'},
         {"yaw-sigma", required_argument, 0, 'y'}, {"fix-yaw", no_argument, 0, 'F'},
         {"cross-extent", required_argument, 0, 'X'}, {"surge-sigma", required_argument, 0, 'U'},
-        {"range-extent", required_argument, 0, 'E'},
+        {"range-extent", required_argument, 0, 'E'}, {"gpu", no_argument, 0, 'g'},
         {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
     long p = 0, q = 1, k = 8, iters = 8, nsub = 1, threads = 0;
-    int json = 0, no_global = 0, have_p = 0, have_q = 0, motion_lag = 0, fix_yaw = 0;
+    int json = 0, no_global = 0, have_p = 0, have_q = 0, motion_lag = 0, fix_yaw = 0, gpu = 0;
     double prior[3] = {0, 0, 0}, range = NAN, box[3] = {NAN, NAN, NAN}, yaw_sigma = 0, cross_extent = 0,
            surge_sigma = 0, range_extent = 0;
     int opt;
@@ -98,6 +101,7 @@ int cmd_pair(int argc, char **argv)
                 return cli_usage("pair", "--box needs three positive half-widths S,W,Y");
             break;
         case 'F': fix_yaw = 1; break;
+        case 'g': gpu = 1; break;
         case 'X':
             if (cli_parse_double(optarg, &cross_extent) || !(cross_extent > 0))
                 return cli_usage("pair", "--cross-extent needs a positive length (m)");
@@ -168,6 +172,7 @@ int cmd_pair(int argc, char **argv)
     po.yaw_sigma = yaw_sigma;
     po.surge_sigma = surge_sigma;
     po.fix_yaw = fix_yaw;
+    po.gpu = gpu;
     if (cross_extent > 0) po.cross_extent = cross_extent;
     if (range_extent > 0) po.range_extent = range_extent;
     if (sasnav_pair_opts_check(&po)) {

@@ -20,7 +20,7 @@ static const char *help =
     "usage: sasnav validate run.h5 -o DIR [--k-min K] [--k-max K]\n"
     "                       [--fix-yaw | --yaw-sigma S] [--surge-sigma S] [--long-baselines]\n"
     "                       [--k K] [--i I] [--refine [--sweeps N] [--sparsity EPS]]\n"
-    "                       [--grid X0,X1,NX,Y0,Y1,NY] [--threads N] [--json]\n"
+    "                       [--grid X0,X1,NX,Y0,Y1,NY] [--threads N] [--gpu] [--json]\n"
     "                       [--checkpoint FILE]\n"
     "\n"
     "The validation method of the paper's tank experiment (Sec. V): from a run\n"
@@ -64,6 +64,8 @@ static const char *help =
     "  --grid ...         image grid (default: the track's extent x range of\n"
     "                     interest +-0.35 m, 5 mm pixels)\n"
     "  --threads N        OpenMP threads (default: all cores)\n"
+    "  --gpu              the pair estimates' error evaluations on a CUDA GPU\n"
+    "                     (builds configured with -DSASNAV_CUDA=ON)\n"
     "  --json             print the summary on stdout\n"
     "  --checkpoint FILE  keep every pair estimate in FILE as it is made; an\n"
     "                     interrupted validation run again with the same\n"
@@ -339,6 +341,7 @@ int cmd_validate(int argc, char **argv)
         {"long-baselines", no_argument, 0, 'L'}, {"surge-sigma", required_argument, 0, 'U'},
         {"k", required_argument, 0, 'k'},     {"i", required_argument, 0, 'i'},
         {"grid", required_argument, 0, 'g'},  {"threads", required_argument, 0, 't'},
+        {"gpu", no_argument, 0, 'G'},
         {"json", no_argument, 0, 'j'},        {"output", required_argument, 0, 'o'},
         {"refine", no_argument, 0, 'R'},   {"sweeps", required_argument, 0, 's'},
         {"sparsity", required_argument, 0, 'e'}, {"help", no_argument, 0, 'h'},
@@ -356,6 +359,7 @@ int cmd_validate(int argc, char **argv)
         case 'a': if (cli_parse_int(optarg, 1, 127, &kmin)) return cli_usage("validate", "--k-min needs 1..127"); break;
         case 'b': if (cli_parse_int(optarg, 1, 127, &kmax)) return cli_usage("validate", "--k-max needs 1..127"); break;
         case 'F': vo.nav.pair.fix_yaw = 1; break;
+        case 'G': vo.nav.pair.gpu = 1; break;
         case 'L': vo.nav.long_baselines = 1; break;
         case 'y':
             if (cli_parse_double(optarg, &vo.nav.pair.yaw_sigma) || !(vo.nav.pair.yaw_sigma >= 0))

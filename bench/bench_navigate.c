@@ -2,6 +2,7 @@
  * paper-trajectory runs (16 pings, 15 pairs).
  *
  * usage: bench_navigate [--seeds S0 N] [--snr DB|inf] [--threads T1,T2,...]
+ *                       [--gpu | --gpu-copy]
  *
  * For each of N seeds from S0 (the `sasnav simulate --seed` convention:
  * scene 3s+1, trajectory 3s+2, noise 3s+3), simulates the run once and
@@ -10,11 +11,16 @@
  * per pair, how many pairs ran at a time, the final cumulative sway error
  * (the paper's figure of merit, bound lambda/25) and whether the pair
  * estimates are bit-identical to those of the first thread count. Then the
- * peak resident memory (ru_maxrss). */
+ * peak resident memory (ru_maxrss). --gpu: the evaluations on a CUDA GPU
+ * (builds with -DSASNAV_CUDA=ON: docs/estimator.md, "GPU"); --gpu-copy: the
+ * same with q's pairs computed on the CPU and copied (the slower variant). */
 #include "sasnav/error.h"
 #include "sasnav/navigate.h"
 #include "sasnav/sim.h"
 #include "bench_util.h"
+#ifdef SASNAV_HAVE_CUDA
+#include "gpu/gpu_eval.h"
+#endif
 
 #include <math.h>
 #include <stdio.h>
@@ -40,7 +46,7 @@ int main(int argc, char **argv)
 {
     long s0 = 101, ns = 1;
     double snr = 30.0;
-    int threads[MAX_T] = {1, 2}, nt = 2;
+    int threads[MAX_T] = {1, 2}, nt = 2, gpu = 0;
     for (int a = 1; a < argc; a++) {
         if (bench_seed_option(argc, argv, &a, &s0, &ns, &snr)) continue;
         if (!strcmp(argv[a], "--threads") && a + 1 < argc) {
@@ -49,14 +55,23 @@ int main(int argc, char **argv)
                 threads[nt++] = (int)strtol(p, &p, 10);
                 if (*p == ',') p++;
             }
+        } else if (!strcmp(argv[a], "--gpu")) {
+            gpu = 1;
+        } else if (!strcmp(argv[a], "--gpu-copy")) {
+            gpu = 2;
         } else {
-            fprintf(stderr, "usage: bench_navigate [--seeds S0 N] [--snr DB|inf] [--threads T1,T2,...]\n");
+            fprintf(stderr, "usage: bench_navigate [--seeds S0 N] [--snr DB|inf] [--threads T1,T2,...] "
+                            "[--gpu | --gpu-copy]\n");
             return 2;
         }
     }
     if (ns < 1 || nt < 1) return 2;
+#ifdef SASNAV_HAVE_CUDA
+    sasnav_gpu_use_device_geometry(gpu != 2);
+#endif
     const double lambda = 1500.0 / 300e3;
-    printf("paper-trajectory, SNR %g dB, seeds %ld..%ld\n", snr, s0, s0 + ns - 1);
+    printf("paper-trajectory, SNR %g dB, seeds %ld..%ld%s\n", snr, s0, s0 + ns - 1,
+           gpu == 1 ? ", evaluations on the GPU" : gpu == 2 ? ", evaluations on the GPU (pairs copied)" : "");
     printf("%6s %8s %10s %10s %10s %8s %14s %10s\n", "seed", "threads", "pairs_s", "pairs/s", "s/pair",
            "at once", "final sway mm", "identical");
     int bad = 0;
@@ -69,6 +84,7 @@ int main(int argc, char **argv)
             sasnav_navigate_opts no;
             sasnav_navigate_default_opts(&no);
             no.nthreads = threads[t];
+            no.pair.gpu = gpu != 0;
             sasnav_navigation nav;
             if (sasnav_navigate(run, &no, &nav)) {
                 fprintf(stderr, "navigate: %s\n", sasnav_last_error());

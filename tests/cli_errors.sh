@@ -83,6 +83,14 @@ expect_fail "NaN --snr" "$T/out8.h5" "$SASNAV" simulate --preset paper-pair --sn
 
 # Bad run files: missing, not HDF5, truncated, missing dataset.
 expect_fail "missing run" "$T/i1.h5" "$SASNAV" image "$T/nothere.h5" -o "$T/i1.h5"
+# --gpu in a build without CUDA: refused before any work, saying how to get it
+# (a CUDA build runs it: tests/test_gpu.c)
+if "$SASNAV" pair "$T/run.h5" --gpu >/dev/null 2>"$T/gpu.txt" || ! grep -q "has no CUDA" "$T/gpu.txt"; then
+    echo "ok   --gpu: this build has CUDA (checked by test_gpu)"
+else
+    expect_fail "--gpu without CUDA" "$T/g1.h5" "$SASNAV" navigate "$T/run.h5" --gpu -o "$T/g1.h5"
+    grep -q "SASNAV_CUDA=ON" "$T/stderr" || { echo "FAIL --gpu message: $(cat "$T/stderr")"; fails=$((fails + 1)); }
+fi
 echo "not an hdf5 file" >"$T/text.h5"
 expect_fail "not HDF5" "$T/i2.h5" "$SASNAV" image "$T/text.h5" -o "$T/i2.h5"
 size=$(wc -c <"$T/run.h5")

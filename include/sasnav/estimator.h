@@ -112,6 +112,11 @@ typedef struct {
     int nthreads;          /* OpenMP threads for the operators (0 = default) */
     sasnav_op_opts op;     /* operator options (default: sasnav_op's, with
                               tolerance 1e-3: docs/estimator.md) */
+    int gpu;               /* 1: the error evaluations on a CUDA GPU (builds
+                              made with -DSASNAV_CUDA=ON; otherwise
+                              SASNAV_ERR_UNSUPPORTED); 0 (default): the CPU.
+                              Same criterion, agreeing to float rounding
+                              (docs/estimator.md, "GPU") */
 } sasnav_pair_opts;
 
 void sasnav_pair_default_opts(sasnav_pair_opts *opts);

@@ -6,6 +6,9 @@
  * ping p (computed once per level: reuse of p's work across evaluations),
  * and work buffers. */
 #include "pair_internal.h"
+#ifdef SASNAV_HAVE_CUDA
+#include "gpu/gpu_eval.h"
+#endif
 
 #include <math.h>
 #include <omp.h>
@@ -62,6 +65,9 @@ static double nrm2(const sasnav_cfloat *v, size_t n)
 
 static void level_free(pair_level *lv)
 {
+#ifdef SASNAV_HAVE_CUDA
+    sasnav_gpu_destroy(lv->gpu);
+#endif
     if (!lv->borrowed) {
         sasnav_op_destroy(lv->op_p);
         sasnav_op_destroy(lv->op_q);
@@ -181,6 +187,11 @@ static int level_make_ops(sasnav_pair *pr, pair_level *lv, double xcentre, pair_
         sasnav_op_destroy(lv->op_p);
         sasnav_op_destroy(lv->op_q);
     }
+#ifdef SASNAV_HAVE_CUDA
+    sasnav_gpu_destroy(lv->gpu); /* made again for the new operators */
+#endif
+    lv->gpu = NULL;
+    lv->gpu_q_placed = lv->gpu_points = 0;
     lv->op_p = lv->op_q = NULL;
     lv->borrowed = 0;
     lv->q_placed = 0;
@@ -251,7 +262,14 @@ int sasnav_pair_opts_check(const sasnav_pair_opts *o)
     if (!(o->verdict_eta_max > 0)) OPT_FAIL("verdict_eta_max %g must be > 0", o->verdict_eta_max);
     if (!(o->verdict_margin_min >= 1) || !isfinite(o->verdict_margin_min))
         OPT_FAIL("verdict_margin_min %g must be finite and >= 1", o->verdict_margin_min);
+    if (o->gpu != 0 && o->gpu != 1) OPT_FAIL("gpu = %d must be 0 or 1", o->gpu);
 #undef OPT_FAIL
+#ifndef SASNAV_HAVE_CUDA
+    if (o->gpu)
+        return sasnav_set_error(SASNAV_ERR_UNSUPPORTED,
+                                "estimator options: gpu = 1, but this build has no CUDA "
+                                "(configure with -DSASNAV_CUDA=ON)");
+#endif
     return SASNAV_OK;
 }
 
@@ -577,26 +595,33 @@ int sasnav_pair_set_data_run(sasnav_pair *pr, const sasnav_run *run, int p, int 
 
 /* Places q's operator at the hypothesised motion error (skipped when it is
  * already there). */
+/* q's sensors at the hypothesised motion error: T_q(sigma) = q's EPCA
+ * geometry (or its channels, pr->per_channel) placed at sigma = nominal +
+ * error; poses[0] or poses[0 .. n_rx - 1]. */
+static void q_poses(const sasnav_pair *pr, sasnav_pose error, sasnav_ping_pose *poses)
+{
+    sasnav_pose sigma = {pr->nominal.x + error.x, pr->nominal.y + error.y,
+                         pr->nominal.theta + error.theta};
+    if (pr->per_channel)
+        for (int l = 0; l < pr->array.n_rx; l++) poses[l] = sasnav_ping_place(sigma, &pr->chan_q[l]);
+    else
+        poses[0] = sasnav_ping_place(sigma, &pr->local_q);
+}
+
+static int same_pose(sasnav_pose a, sasnav_pose b)
+{
+    return a.x == b.x && a.y == b.y && a.theta == b.theta;
+}
+
 static int place_q(sasnav_pair *pr, int level, sasnav_pose error)
 {
     pair_level *own = ops_owner(pr, level);
-    if (own->q_placed && own->q_sigma.x == error.x && own->q_sigma.y == error.y &&
-        own->q_sigma.theta == error.theta)
-        return SASNAV_OK;
+    if (own->q_placed && same_pose(own->q_sigma, error)) return SASNAV_OK;
     own->q_placed = 0;
-    sasnav_pose sigma = {pr->nominal.x + error.x, pr->nominal.y + error.y,
-                         pr->nominal.theta + error.theta};
-    /* Move q's sensors: T_q(sigma) = q's EPCA geometry (or its channels)
-     * placed at sigma. */
-    int rc;
-    if (pr->per_channel) {
-        sasnav_ping_pose ch[SASNAV_MAX_RX];
-        for (int l = 0; l < pr->array.n_rx; l++) ch[l] = sasnav_ping_place(sigma, &pr->chan_q[l]);
-        rc = sasnav_op_set_channels(own->op_q, ch);
-    } else {
-        sasnav_ping_pose q = sasnav_ping_place(sigma, &pr->local_q);
-        rc = sasnav_op_set_geometry(own->op_q, &q);
-    }
+    sasnav_ping_pose poses[SASNAV_MAX_RX];
+    q_poses(pr, error, poses);
+    int rc = pr->per_channel ? sasnav_op_set_channels(own->op_q, poses)
+                             : sasnav_op_set_geometry(own->op_q, &poses[0]);
     if (rc) return rc;
     own->q_sigma = error;
     own->q_placed = 1;
@@ -661,6 +686,60 @@ static int intersect_both(sasnav_pair *pr, pair_level *lv, sasnav_op *op_p, sasn
     return SASNAV_OK;
 }
 
+#ifdef SASNAV_HAVE_CUDA
+/* rho_q, psi_p and psi_q of the evaluation on the GPU (src/gpu/): the same
+ * steps as the CPU path below, the operators copied to the device when
+ * their geometry changed. The context belongs to the level that owns the
+ * operators. Applications are counted as on the CPU. */
+static int gpu_project(sasnav_pair *pr, int level, pair_level *lv, sasnav_pose error)
+{
+    pair_level *own = ops_owner(pr, level);
+    sasnav_op_view vp, vq;
+    int device_geometry = sasnav_gpu_device_geometry();
+    int rc = sasnav_op_view_get(own->op_p, &vp);
+    if (!rc && !own->gpu) {
+        rc = sasnav_gpu_create(&vp, &own->gpu);
+        own->gpu_q_placed = own->gpu_points = 0;
+    }
+    if (!rc && device_geometry && !own->gpu_points) {
+        sasnav_op_geometry_consts c;
+        rc = sasnav_op_geometry_consts_get(own->op_q, &c);
+        if (!rc) rc = sasnav_gpu_set_points(own->gpu, &c);
+        own->gpu_points = !rc;
+        own->gpu_q_placed = 0;
+    }
+    if (!rc) rc = sasnav_gpu_set_op(own->gpu, 0, &vp);
+    if (rc) return rc;
+    if (device_geometry) {
+        /* q's pairs computed on the device (the CPU operator stays where it
+         * was: place_q keeps its own record) */
+        if (!own->gpu_q_placed || !same_pose(own->gpu_q_sigma, error)) {
+            own->gpu_q_placed = 0;
+            sasnav_ping_pose poses[SASNAV_MAX_RX];
+            sasnav_op_channel_geometry ch[SASNAV_MAX_RX];
+            q_poses(pr, error, poses);
+            rc = sasnav_op_channel_geometry_get(own->op_q, poses, pr->per_channel, ch);
+            if (!rc) rc = sasnav_gpu_place(own->gpu, 1, ch);
+            if (rc) return rc;
+            own->gpu_q_sigma = error;
+            own->gpu_q_placed = 1;
+        }
+    } else {
+        own->gpu_q_placed = 0; /* the device's q is now the copy */
+        rc = place_q(pr, level, error);
+        if (!rc) rc = sasnav_op_view_get(own->op_q, &vq);
+        if (!rc) rc = sasnav_gpu_set_op(own->gpu, 1, &vq);
+    }
+    if (!rc)
+        rc = sasnav_gpu_eval(own->gpu, (const float *)pr->data_q, (const float *)lv->rho_p, lv->k,
+                             lv->i, pr->opts.tikhonov, (float *)lv->rho_q, (float *)lv->psi_p,
+                             (float *)lv->psi_q);
+    if (rc) return rc;
+    pr->applications += cgls_cost(lv->k) + 4L * lv->i * (1 + cgls_cost(lv->k));
+    return SASNAV_OK;
+}
+#endif
+
 /* Separable Gaussian blur of a real map (sigmas in metres along track and
  * in range; 0 = no blur along that axis), zero outside. */
 static void blur_map(const sasnav_grid *g, double sigma_x, double sigma_y, double *f, double *tmp)
@@ -718,17 +797,26 @@ int sasnav_pair_eval(sasnav_pair *pr, sasnav_pose error, int level, int blurred,
         }
     }
     lv->last_valid = 0;
-    int rc = place_q(pr, level, error);
-    if (rc) return rc;
-    sasnav_cgls_opts co = {lv->k, pr->opts.tikhonov};
-    rc = sasnav_cgls(lv->op_q, pr->data_q, &co, lv->rho_q, lv->cgls_work);
-    pr->applications += cgls_cost(lv->k);
-    if (rc) return rc;
-    /* psi_p = (Q_p Q_q)^i rho_p and psi_q = (Q_q Q_p)^i rho_q */
-    memcpy(lv->psi_p, lv->rho_p, sizeof(sasnav_cfloat) * np);
-    memcpy(lv->psi_q, lv->rho_q, sizeof(sasnav_cfloat) * np);
-    rc = intersect_both(pr, lv, lv->op_p, lv->op_q);
-    if (rc) return rc;
+    int rc;
+#ifdef SASNAV_HAVE_CUDA
+    if (pr->opts.gpu) {
+        rc = gpu_project(pr, level, lv, error);
+        if (rc) return rc;
+    } else
+#endif
+    {
+        rc = place_q(pr, level, error);
+        if (rc) return rc;
+        sasnav_cgls_opts co = {lv->k, pr->opts.tikhonov};
+        rc = sasnav_cgls(lv->op_q, pr->data_q, &co, lv->rho_q, lv->cgls_work);
+        pr->applications += cgls_cost(lv->k);
+        if (rc) return rc;
+        /* psi_p = (Q_p Q_q)^i rho_p and psi_q = (Q_q Q_p)^i rho_q */
+        memcpy(lv->psi_p, lv->rho_p, sizeof(sasnav_cfloat) * np);
+        memcpy(lv->psi_q, lv->rho_q, sizeof(sasnav_cfloat) * np);
+        rc = intersect_both(pr, lv, lv->op_p, lv->op_q);
+        if (rc) return rc;
+    }
     pr->evaluations++;
     /* Error window: the operators' grid is wider than the compared region
      * (echoes from outside a grid fold onto its edges, differently for p and

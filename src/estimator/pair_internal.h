@@ -45,6 +45,12 @@ typedef struct {
     int xc_nx, xc_ny;
     fftwf_complex *xc_p, *xc_q;
     fftwf_plan xc_fwd_p, xc_fwd_q, xc_inv;
+    /* Device copy of the operators this level owns (opts.gpu; src/gpu/). */
+    struct sasnav_gpu *gpu;
+    /* The hypothesis q's device operator was last placed at (valid:
+     * gpu_q_placed; device-side geometry). */
+    sasnav_pose gpu_q_sigma;
+    int gpu_q_placed, gpu_points; /* gpu_points: sasnav_gpu_set_points done */
 } pair_level;
 
 struct sasnav_pair {

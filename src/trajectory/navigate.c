@@ -222,6 +222,11 @@ static uint64_t options_digest(const sasnav_run *run, const sasnav_navigate_opts
                                po->verdict_eta_max, po->verdict_margin_min, po->op.tolerance,
                                po->op.oversampling, 0, 0, 0, 0, 0, 0};
         h = sasnav_hash_doubles(h, pd, 31);
+        /* GPU estimates agree with the CPU's to float rounding, not to the
+         * bit: a checkpoint of one is not resumed by the other (CPU keys
+         * are those of earlier versions) */
+        const int gi[1] = {po->gpu};
+        if (po->gpu) h = hash_ints(h, gi, 1);
     } else if (o->method == SASNAV_METHOD_DPCA) {
         const sasnav_dpca_opts *d = &o->dpca;
         const int di[4] = {d->upsampling, d->use_phase, d->unwrap, d->bistatic_correction};

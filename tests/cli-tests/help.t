@@ -102,7 +102,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                      [--prior S,W,Y] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]
                      [--cross-extent M] [--range-extent M]
                      [--no-global] [--subintervals N]
-                     [--range R] [--lag-model fixed|motion] [--threads N]
+                     [--range R] [--lag-model fixed|motion] [--threads N] [--gpu]
   
   Estimates the motion error (displacement minus nominal) of ping q relative
   to ping p: surge and sway in metres, yaw in radians. Without --p/--q the
@@ -132,6 +132,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       tx_lag, default) or 'motion' (speed x 2 R / c at the
                       sub-interval's centre range R)
     --threads N       OpenMP threads
+    --gpu             the error evaluations on a CUDA GPU (builds configured
+                      with -DSASNAV_CUDA=ON; the same estimates to float
+                      rounding: docs/estimator.md, "GPU")
 
   $ sasnav cuts --help
   usage: sasnav cuts run.h5 [--p I --q J] [--around S,W,Y | --around-truth]
@@ -219,7 +222,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                          [--cross-extent M] [--range-extent M]
                          [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]
                          [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]
-                         [--threads N] [--json] [--checkpoint FILE]
+                         [--threads N] [--gpu] [--json] [--checkpoint FILE]
                          [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5
          sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]
                          [--iterations N] [--closed] [--keep-length]
@@ -292,6 +295,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       the written navigation then images on the truth's grid)
     --threads N       OpenMP threads (default: all cores); with several, pairs
                       are estimated concurrently (same results, bit for bit)
+    --gpu             the pairs' error evaluations on a CUDA GPU (builds
+                      configured with -DSASNAV_CUDA=ON; the same estimates to
+                      float rounding: docs/estimator.md, "GPU")
     --checkpoint FILE  keep every pair estimate in FILE as it is made; if the
                       command is interrupted (Ctrl-C, kill, a crash), the same
                       command resumes from FILE and gives the same result
@@ -408,7 +414,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   usage: sasnav validate run.h5 -o DIR [--k-min K] [--k-max K]
                          [--fix-yaw | --yaw-sigma S] [--surge-sigma S] [--long-baselines]
                          [--k K] [--i I] [--refine [--sweeps N] [--sparsity EPS]]
-                         [--grid X0,X1,NX,Y0,Y1,NY] [--threads N] [--json]
+                         [--grid X0,X1,NX,Y0,Y1,NY] [--threads N] [--gpu] [--json]
                          [--checkpoint FILE]
   
   The validation method of the paper's tank experiment (Sec. V): from a run
@@ -452,6 +458,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --grid ...         image grid (default: the track's extent x range of
                        interest +-0.35 m, 5 mm pixels)
     --threads N        OpenMP threads (default: all cores)
+    --gpu              the pair estimates' error evaluations on a CUDA GPU
+                       (builds configured with -DSASNAV_CUDA=ON)
     --json             print the summary on stdout
     --checkpoint FILE  keep every pair estimate in FILE as it is made; an
                        interrupted validation run again with the same

@@ -281,6 +281,7 @@ class PairOpts(Structure):  # estimator.h
         ("verdict_margin_min", c_double),
         ("nthreads", c_int),
         ("op", OpOpts),
+        ("gpu", c_int),
     ]
 
 

@@ -1,0 +1,83 @@
+/* The estimator's error evaluation on a CUDA GPU (optional: built with
+ * -DSASNAV_CUDA=ON, which defines SASNAV_HAVE_CUDA; docs/estimator.md,
+ * "GPU").
+ *
+ * One context per estimator level holds device copies of the level's two
+ * operators (p's and q's geometry, copied again only when the operator's
+ * geometry changed: op_view.h's serial) and runs what sasnav_pair_eval runs
+ * on the CPU: rho_q = T_q^+ phi_q, then psi_p = (Q_p Q_q)^i rho_p and
+ * psi_q = (Q_q Q_p)^i rho_q, the two chains on two streams. The operator is
+ * the same NUFFT as src/operators/op.c, computed in another order: the
+ * spread gathers, per fine-grid sample, the pairs sorted by fine index
+ * (deterministic: no atomics), the adjoint interpolates per point over the
+ * channels, the FFTs are cuFFT's. Results agree with the CPU's to float
+ * rounding, not to the bit; for a given GPU and build they are the same
+ * bits from run to run. */
+#ifndef SASNAV_GPU_EVAL_H
+#define SASNAV_GPU_EVAL_H
+
+#include "operators/op_view.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct sasnav_gpu sasnav_gpu;
+
+/* Complex vectors are interleaved (re, im) floats (sasnav_cfloat's layout;
+ * the CUDA side has no C complex type). */
+
+/* A context for operators shaped like `shape` (points, channels, samples,
+ * grids: sasnav_op_view_get). SASNAV_ERR_UNSUPPORTED without a usable
+ * device. */
+int sasnav_gpu_create(const sasnav_op_view *shape, sasnav_gpu **out);
+void sasnav_gpu_destroy(sasnav_gpu *g);
+
+/* Copies op's current geometry to the device as operator `which` (0: p,
+ * 1: q), unless the copy already holds it. */
+int sasnav_gpu_set_op(sasnav_gpu *g, int which, const sasnav_op_view *op);
+
+/* out = T x (adjoint = 0: x has n_points entries, out n_rx x n_samples) or
+ * T^H x (adjoint = 1) with operator `which`; host arrays (checks, benches). */
+int sasnav_gpu_apply(sasnav_gpu *g, int which, int adjoint, const float *x, float *out);
+
+/* x = T^+ data by k CGLS iterations with operator `which` (sasnav_cgls). */
+int sasnav_gpu_cgls(sasnav_gpu *g, int which, const float *data, int k, double tikhonov,
+                    float *x);
+
+/* The evaluation: rho_q = T_q^+ data_q (k iterations), psi_p = (Q_p
+ * Q_q)^i rho_p, psi_q = (Q_q Q_p)^i rho_q, Q = T^+ T; host arrays (rho_q,
+ * psi_p, psi_q: n_points each). */
+int sasnav_gpu_eval(sasnav_gpu *g, const float *data_q, const float *rho_p, int k, int i,
+                    double tikhonov, float *rho_q, float *psi_p, float *psi_q);
+
+/* Device-side geometry (instead of copying the CPU operator's pairs after
+ * its set_geometry): sasnav_gpu_set_points once per context with the
+ * operator's constants (sasnav_op_geometry_consts_get), then
+ * sasnav_gpu_place per hypothesis with the channel geometries
+ * (sasnav_op_channel_geometry_get): the pairs (fine index, taps, G) are
+ * computed on the device by set_geometry's formulas, in double, and sorted
+ * there (stable radix sort). SASNAV_ERR_GEOMETRY where a point coincides
+ * with a sensor. */
+int sasnav_gpu_set_points(sasnav_gpu *g, const sasnav_op_geometry_consts *c);
+int sasnav_gpu_place(sasnav_gpu *g, int which, const sasnav_op_channel_geometry *channels);
+
+/* Whether the estimator places q's operator on the device (1, the default)
+ * or copies the CPU operator's pairs (0). Not thread-safe: set it before
+ * use. */
+void sasnav_gpu_use_device_geometry(int on);
+int sasnav_gpu_device_geometry(void);
+
+/* Whether contexts created from now on run the evaluation as one captured
+ * CUDA graph (1, the default) or launch its ~4,700 steps one by one (0;
+ * the same results: for benches). Not thread-safe: set it before use. */
+void sasnav_gpu_use_graphs(int on);
+
+/* The device's name (for reports); "" without a context. */
+const char *sasnav_gpu_name(const sasnav_gpu *g);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
