@@ -67,7 +67,7 @@ int main(int argc, char **argv)
     }
     if (ns < 1 || nt < 1) return 2;
 #ifdef SASNAV_HAVE_CUDA
-    sasnav_gpu_use_device_geometry(gpu != 2);
+    gpu_use_device_geometry(gpu != 2);
 #endif
     const double lambda = 1500.0 / 300e3;
     printf("paper-trajectory, SNR %g dB, seeds %ld..%ld%s\n", snr, s0, s0 + ns - 1,

@@ -80,11 +80,11 @@ static int check_operator(const sasnav_run *run, double tol)
     sasnav_pose centroid = {0.004, -0.002, 0.01};
     sasnav_ping_pose ping = sasnav_ping_place(centroid, &local);
     rc = sasnav_op_set_geometry(op, &ping);
-    sasnav_op_view v;
-    if (!rc) rc = sasnav_op_view_get(op, &v);
-    sasnav_gpu *g = NULL;
-    if (!rc) rc = sasnav_gpu_create(&v, &g);
-    if (!rc) rc = sasnav_gpu_set_op(g, 0, &v);
+    op_view v;
+    if (!rc) rc = op_view_get(op, &v);
+    gpu_ctx *g = NULL;
+    if (!rc) rc = gpu_create(&v, &g);
+    if (!rc) rc = gpu_set_op(g, 0, &v);
     if (rc) {
         sasnav_op_destroy(op);
         return rc;
@@ -101,33 +101,33 @@ static int check_operator(const sasnav_run *run, double tol)
         img[n] = a + b * I;
     }
     rc = sasnav_op_forward(op, img, dat);
-    if (!rc) rc = sasnav_gpu_apply(g, 0, 0, (const float *)img, (float *)dat2);
+    if (!rc) rc = gpu_apply(g, 0, 0, (const float *)img, (float *)dat2);
     if (!rc) printf("operator  T     relative difference GPU - CPU %.2e\n", rel_diff(dat2, dat, nd));
     if (!rc) rc = sasnav_op_adjoint(op, dat, img2);
-    if (!rc) rc = sasnav_gpu_apply(g, 0, 1, (const float *)dat, (float *)img);
+    if (!rc) rc = gpu_apply(g, 0, 1, (const float *)dat, (float *)img);
     if (!rc) printf("operator  T^H   relative difference GPU - CPU %.2e\n", rel_diff(img, img2, (size_t)np));
     sasnav_cgls_opts co = {8, 0.0};
     if (!rc) rc = sasnav_cgls(op, dat, &co, img2, NULL);
-    if (!rc) rc = sasnav_gpu_cgls(g, 0, (const float *)dat, 8, 0.0, (float *)img);
+    if (!rc) rc = gpu_cgls(g, 0, (const float *)dat, 8, 0.0, (float *)img);
     if (!rc) printf("CGLS k = 8      relative difference GPU - CPU %.2e\n", rel_diff(img, img2, (size_t)np));
     if (!rc) {
         /* timing of single applications (host copies included) */
         double t0 = now();
         int reps = 200;
-        for (int r = 0; r < reps && !rc; r++) rc = sasnav_gpu_apply(g, 0, 0, (const float *)img, (float *)dat2);
+        for (int r = 0; r < reps && !rc; r++) rc = gpu_apply(g, 0, 0, (const float *)img, (float *)dat2);
         double tg = (now() - t0) / reps;
         t0 = now();
         for (int r = 0; r < reps && !rc; r++) rc = sasnav_op_forward(op, img, dat);
         double tc = (now() - t0) / reps;
         if (!rc) printf("forward with host copies: GPU %.3f ms, CPU %.3f ms (%d threads)\n", 1e3 * tg, 1e3 * tc,
                         o.nthreads);
-        if (!rc) printf("device: %s\n", sasnav_gpu_name(g));
+        if (!rc) printf("device: %s\n", gpu_name(g));
     }
     free(img);
     free(img2);
     free(dat);
     free(dat2);
-    sasnav_gpu_destroy(g);
+    gpu_destroy(g);
     sasnav_op_destroy(op);
     return rc;
 }
@@ -177,8 +177,8 @@ static int check_evals(const sasnav_run *run, const sasnav_pair_opts *po, sasnav
     double *tc = malloc(sizeof(double) * m), *tg = malloc(sizeof(double) * m);
     double med[2][3] = {{0}}, medc[2] = {0, 0};
     for (int mode = 0; mode < 3 && !rc; mode++) {
-        sasnav_gpu_use_graphs(mode > 0);
-        sasnav_gpu_use_device_geometry(mode == 2);
+        gpu_use_graphs(mode > 0);
+        gpu_use_device_geometry(mode == 2);
         sasnav_pose nominal = sasnav_ping_displacement(&run->nav[0], &run->nav[1]);
         sasnav_pair_opts o = *po;
         o.gpu = 1;
@@ -211,8 +211,8 @@ static int check_evals(const sasnav_run *run, const sasnav_pair_opts *po, sasnav
         sasnav_pair_destroy(pp.gpu);
         pp.gpu = NULL;
     }
-    sasnav_gpu_use_graphs(1);
-    sasnav_gpu_use_device_geometry(1);
+    gpu_use_graphs(1);
+    gpu_use_device_geometry(1);
     for (int level = 1; level <= 2 && !rc; level++)
         printf("level-%d evaluation, CPU (%d threads): median %.2f ms (3); CPU / GPU: %.1f, %.1f, %.1f\n",
                level, po->nthreads, 1e3 * medc[level - 1], medc[level - 1] / med[level - 1][0],
@@ -241,7 +241,7 @@ static int estimate_both(const sasnav_run *run, const sasnav_pair_opts *po, sasn
     }
     for (int k = 0; k < 3 && !rc; k++) {
         sasnav_pair_result r;
-        sasnav_gpu_use_device_geometry(k == 2);
+        gpu_use_device_geometry(k == 2);
         double t0 = now();
         rc = sasnav_pair_estimate(k == 0 ? pp.cpu : k == 1 ? pp.gpu : gpu2, &r);
         double t = now() - t0;
@@ -255,7 +255,7 @@ static int estimate_both(const sasnav_run *run, const sasnav_pair_opts *po, sasn
                r.evaluations, r.applications, t, r.seconds_global, r.seconds_zeta, r.seconds_eta,
                r.seconds_final, ok ? "ok" : "FAIL");
     }
-    sasnav_gpu_use_device_geometry(1);
+    gpu_use_device_geometry(1);
     if (!rc)
         printf("    wall-time ratio CPU / GPU: %.1f (GPc: pairs copied), %.1f (GPd: device geometry)\n",
                ratio[0] / ratio[1], ratio[0] / ratio[2]);

@@ -66,7 +66,7 @@ static double nrm2(const sasnav_cfloat *v, size_t n)
 static void level_free(pair_level *lv)
 {
 #ifdef SASNAV_HAVE_CUDA
-    sasnav_gpu_destroy(lv->gpu);
+    gpu_destroy(lv->gpu);
 #endif
     if (!lv->borrowed) {
         sasnav_op_destroy(lv->op_p);
@@ -188,7 +188,7 @@ static int level_make_ops(sasnav_pair *pr, pair_level *lv, double xcentre, pair_
         sasnav_op_destroy(lv->op_q);
     }
 #ifdef SASNAV_HAVE_CUDA
-    sasnav_gpu_destroy(lv->gpu); /* made again for the new operators */
+    gpu_destroy(lv->gpu); /* made again for the new operators */
 #endif
     lv->gpu = NULL;
     lv->gpu_q_placed = lv->gpu_points = 0;
@@ -292,6 +292,9 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
     else sasnav_pair_default_opts(&pr->opts);
     sasnav_pair_opts *o = &pr->opts;
     rc = sasnav_pair_opts_check(o);
+#ifdef SASNAV_HAVE_CUDA
+    if (!rc && o->gpu) rc = gpu_check_device(); /* at once, not at the first evaluation */
+#endif
     if (rc) {
         free(pr);
         return rc;
@@ -694,21 +697,21 @@ static int intersect_both(sasnav_pair *pr, pair_level *lv, sasnav_op *op_p, sasn
 static int gpu_project(sasnav_pair *pr, int level, pair_level *lv, sasnav_pose error)
 {
     pair_level *own = ops_owner(pr, level);
-    sasnav_op_view vp, vq;
-    int device_geometry = sasnav_gpu_device_geometry();
-    int rc = sasnav_op_view_get(own->op_p, &vp);
+    op_view vp, vq;
+    int device_geometry = gpu_device_geometry();
+    int rc = op_view_get(own->op_p, &vp);
     if (!rc && !own->gpu) {
-        rc = sasnav_gpu_create(&vp, &own->gpu);
+        rc = gpu_create(&vp, &own->gpu);
         own->gpu_q_placed = own->gpu_points = 0;
     }
     if (!rc && device_geometry && !own->gpu_points) {
-        sasnav_op_geometry_consts c;
-        rc = sasnav_op_geometry_consts_get(own->op_q, &c);
-        if (!rc) rc = sasnav_gpu_set_points(own->gpu, &c);
+        op_geometry_consts c;
+        rc = op_geometry_consts_get(own->op_q, &c);
+        if (!rc) rc = gpu_set_points(own->gpu, &c);
         own->gpu_points = !rc;
         own->gpu_q_placed = 0;
     }
-    if (!rc) rc = sasnav_gpu_set_op(own->gpu, 0, &vp);
+    if (!rc) rc = gpu_set_op(own->gpu, 0, &vp);
     if (rc) return rc;
     if (device_geometry) {
         /* q's pairs computed on the device (the CPU operator stays where it
@@ -716,10 +719,10 @@ static int gpu_project(sasnav_pair *pr, int level, pair_level *lv, sasnav_pose e
         if (!own->gpu_q_placed || !same_pose(own->gpu_q_sigma, error)) {
             own->gpu_q_placed = 0;
             sasnav_ping_pose poses[SASNAV_MAX_RX];
-            sasnav_op_channel_geometry ch[SASNAV_MAX_RX];
+            op_channel_geometry ch[SASNAV_MAX_RX];
             q_poses(pr, error, poses);
-            rc = sasnav_op_channel_geometry_get(own->op_q, poses, pr->per_channel, ch);
-            if (!rc) rc = sasnav_gpu_place(own->gpu, 1, ch);
+            rc = op_channel_geometry_get(own->op_q, poses, pr->per_channel, ch);
+            if (!rc) rc = gpu_place(own->gpu, 1, ch);
             if (rc) return rc;
             own->gpu_q_sigma = error;
             own->gpu_q_placed = 1;
@@ -727,11 +730,11 @@ static int gpu_project(sasnav_pair *pr, int level, pair_level *lv, sasnav_pose e
     } else {
         own->gpu_q_placed = 0; /* the device's q is now the copy */
         rc = place_q(pr, level, error);
-        if (!rc) rc = sasnav_op_view_get(own->op_q, &vq);
-        if (!rc) rc = sasnav_gpu_set_op(own->gpu, 1, &vq);
+        if (!rc) rc = op_view_get(own->op_q, &vq);
+        if (!rc) rc = gpu_set_op(own->gpu, 1, &vq);
     }
     if (!rc)
-        rc = sasnav_gpu_eval(own->gpu, (const float *)pr->data_q, (const float *)lv->rho_p, lv->k,
+        rc = gpu_eval(own->gpu, (const float *)pr->data_q, (const float *)lv->rho_p, lv->k,
                              lv->i, pr->opts.tikhonov, (float *)lv->rho_q, (float *)lv->psi_p,
                              (float *)lv->psi_q);
     if (rc) return rc;
@@ -1084,7 +1087,9 @@ int sasnav_pair_estimate_intervals(const sasnav_run *run, int p, int q,
                                               nominal, yaw);
             if (!r2) r2 = sasnav_pair_estimate_from(pair, out[s].result.error, &again);
             free(yaw);
-            if (r2 == SASNAV_ERR_NOMEM || r2 == SASNAV_ERR_FFT || r2 == SASNAV_ERR_INTERNAL) rc = r2;
+            if (r2 == SASNAV_ERR_NOMEM || r2 == SASNAV_ERR_FFT || r2 == SASNAV_ERR_INTERNAL ||
+                r2 == SASNAV_ERR_UNSUPPORTED)
+                rc = r2;
             else if (!r2 && again.verdict == SASNAV_VERDICT_OK) {
                 sasnav_pair_result_carry(&out[s].result, &again);
                 out[s].result = again;
@@ -1093,7 +1098,8 @@ int sasnav_pair_estimate_intervals(const sasnav_run *run, int p, int q,
         }
         sasnav_pair_destroy(pair);
         out[s].status = rc;
-        if (rc == SASNAV_ERR_NOMEM || rc == SASNAV_ERR_FFT || rc == SASNAV_ERR_INTERNAL) {
+        if (rc == SASNAV_ERR_NOMEM || rc == SASNAV_ERR_FFT || rc == SASNAV_ERR_INTERNAL ||
+            rc == SASNAV_ERR_UNSUPPORTED) { /* not a property of the pair (no GPU, say) */
             free(tx_yaw);
             return rc;
         }

@@ -46,11 +46,11 @@ typedef struct {
     fftwf_complex *xc_p, *xc_q;
     fftwf_plan xc_fwd_p, xc_fwd_q, xc_inv;
     /* Device copy of the operators this level owns (opts.gpu; src/gpu/). */
-    struct sasnav_gpu *gpu;
+    struct gpu_ctx *gpu;
     /* The hypothesis q's device operator was last placed at (valid:
      * gpu_q_placed; device-side geometry). */
     sasnav_pose gpu_q_sigma;
-    int gpu_q_placed, gpu_points; /* gpu_points: sasnav_gpu_set_points done */
+    int gpu_q_placed, gpu_points; /* gpu_points: gpu_set_points done */
 } pair_level;
 
 struct sasnav_pair {

@@ -71,21 +71,21 @@ typedef struct {
     cgls_scalars *sc;
 } chain_ws;
 
-/* set_geometry's constants (sasnav_op_geometry_consts without pointers). */
+/* set_geometry's constants (op_geometry_consts without pointers). */
 typedef struct {
     double inv_c, inv_h, two_f0, start, half, u_max, v_max;
     double att_exploding, att_spherical, att_none;
     int tap_degree;
 } geom_consts;
 
-struct sasnav_gpu {
+struct gpu_ctx {
     int np, n_rx, ns, pad, mp, lf, ext, wpad, kmax, n_blocks;
-    /* Device-side geometry (sasnav_gpu_set_points, sasnav_gpu_place). */
+    /* Device-side geometry (gpu_set_points, gpu_place). */
     int have_points;
     geom_consts gk;
     double *px, *py;
     float *tap_coef;
-    sasnav_op_channel_geometry *chan;
+    op_channel_geometry *chan;
     int *keys_in, *keys_out, *vals_in, *counts, *sums, *near;
     int *h_near; /* pinned */
     void *sort_temp;
@@ -264,13 +264,13 @@ __device__ __forceinline__ double sinc_pi_dev(double a)
  * + first index, value the pair number; counts[l (lf + 1) + index + 1] += 1.
  * Grid: (ceil(np / RTH), n_rx). */
 __global__ void k_geometry(int np, int n_rx, int lf, int wpad, geom_consts k, const double *px,
-                           const double *py, const sasnav_op_channel_geometry *chan,
+                           const double *py, const op_channel_geometry *chan,
                            const float *coef, int32_t *index, float *taps, float2 *green, int *keys,
                            int *vals, int *counts, int *near)
 {
     int n = blockIdx.x * blockDim.x + threadIdx.x, l = blockIdx.y;
     if (n >= np) return;
-    const sasnav_op_channel_geometry g = chan[l];
+    const op_channel_geometry g = chan[l];
     const double min2 = 1e-18; /* op.c's MIN_SENSOR_DISTANCE squared */
     double x = px[n], y = py[n];
     double dxt = x - g.tx_x, dyt = y - g.tx_y;
@@ -414,7 +414,7 @@ __global__ void k_sub_scaled(float2 *s, const float2 *x, size_t n, float lambda,
 
 static unsigned blocks_of(size_t n) { return (unsigned)((n + RTH - 1) / RTH); }
 
-static int forward(sasnav_gpu *g, int which, chain_ws *w, const float2 *x, float2 *out)
+static int forward(gpu_ctx *g, int which, chain_ws *w, const float2 *x, float2 *out)
 {
     const dev_op *o = &g->op[which];
     k_spread<<<dim3((unsigned)((g->lf + SPREAD_WARPS - 1) / SPREAD_WARPS), g->n_rx), 32 * SPREAD_WARPS, 0,
@@ -433,7 +433,7 @@ static int forward(sasnav_gpu *g, int which, chain_ws *w, const float2 *x, float
     return SASNAV_OK;
 }
 
-static int adjoint(sasnav_gpu *g, int which, chain_ws *w, const float2 *d, float2 *out)
+static int adjoint(gpu_ctx *g, int which, chain_ws *w, const float2 *d, float2 *out)
 {
     const dev_op *o = &g->op[which];
     k_pad<<<dim3(blocks_of((size_t)g->mp), g->n_rx), RTH, 0, w->st>>>(g->mp, g->pad, g->ns, d,
@@ -459,7 +459,7 @@ static int norm2(chain_ws *w, const float2 *v, size_t n, double *partial)
 }
 
 /* x = T^+ d by k iterations (sasnav_cgls, same recurrences). */
-static int cgls(sasnav_gpu *g, int which, chain_ws *w, const float2 *d, int k, double tikhonov,
+static int cgls(gpu_ctx *g, int which, chain_ws *w, const float2 *d, int k, double tikhonov,
                 float2 *x)
 {
     size_t np = (size_t)g->np, nd = g->nd;
@@ -499,7 +499,7 @@ static int cgls(sasnav_gpu *g, int which, chain_ws *w, const float2 *d, int k, d
 }
 
 /* out = Q x = T^+ (T x). */
-static int project(sasnav_gpu *g, int which, chain_ws *w, const float2 *x, float2 *out, int k,
+static int project(gpu_ctx *g, int which, chain_ws *w, const float2 *x, float2 *out, int k,
                    double tikhonov)
 {
     int rc = forward(g, which, w, x, w->dtmp);
@@ -510,9 +510,9 @@ static int project(sasnav_gpu *g, int which, chain_ws *w, const float2 *x, float
 /* ------------------------------------------------------------------------ */
 /* Context. */
 
-static int use_graphs = 1; /* sasnav_gpu_use_graphs */
+static int use_graphs = 1; /* gpu_use_graphs */
 
-extern "C" void sasnav_gpu_use_graphs(int on) { use_graphs = on != 0; }
+extern "C" void gpu_use_graphs(int on) { use_graphs = on != 0; }
 
 static void free_op(dev_op *o)
 {
@@ -544,7 +544,7 @@ static void free_ws(chain_ws *w)
     memset(w, 0, sizeof *w);
 }
 
-extern "C" void sasnav_gpu_destroy(sasnav_gpu *g)
+extern "C" void gpu_destroy(gpu_ctx *g)
 {
     if (!g) return;
     for (int c = 0; c < 2; c++) {
@@ -575,7 +575,7 @@ extern "C" void sasnav_gpu_destroy(sasnav_gpu *g)
     free(g);
 }
 
-static int make_ws(sasnav_gpu *g, chain_ws *w)
+static int make_ws(gpu_ctx *g, chain_ws *w)
 {
     size_t np = (size_t)g->np, nd = g->nd;
     /* Non-blocking: no implicit synchronisation with the legacy default
@@ -603,13 +603,22 @@ static int make_ws(sasnav_gpu *g, chain_ws *w)
     return SASNAV_OK;
 }
 
-static int create(const sasnav_op_view *v, sasnav_gpu *g)
+extern "C" int gpu_check_device(void)
 {
     int count = 0;
-    if (cudaGetDeviceCount(&count) != cudaSuccess || count < 1) {
+    cudaError_t e = cudaGetDeviceCount(&count);
+    if (e != cudaSuccess || count < 1) {
         cudaGetLastError(); /* clear the error state */
-        return sasnav_set_error(SASNAV_ERR_UNSUPPORTED, "GPU: no CUDA device is available");
+        return sasnav_set_error(SASNAV_ERR_UNSUPPORTED, "GPU: no usable CUDA device (%s)",
+                                e != cudaSuccess ? cudaGetErrorString(e) : "none found");
     }
+    return SASNAV_OK;
+}
+
+static int create(const op_view *v, gpu_ctx *g)
+{
+    int rc = gpu_check_device();
+    if (rc) return rc;
     cudaDeviceProp prop;
     CK(cudaGetDeviceProperties(&prop, 0));
     snprintf(g->name, sizeof g->name, "%s", prop.name);
@@ -658,29 +667,29 @@ static int create(const sasnav_op_view *v, sasnav_gpu *g)
     return SASNAV_OK;
 }
 
-extern "C" int sasnav_gpu_create(const sasnav_op_view *shape, sasnav_gpu **out)
+extern "C" int gpu_create(const op_view *shape, gpu_ctx **out)
 {
     if (!shape || !out) return sasnav_set_error(SASNAV_ERR_ARG, "GPU: NULL argument");
     *out = NULL;
-    sasnav_gpu *g = (sasnav_gpu *)calloc(1, sizeof *g);
+    gpu_ctx *g = (gpu_ctx *)calloc(1, sizeof *g);
     if (!g) return sasnav_set_error(SASNAV_ERR_NOMEM, "GPU: out of memory");
     int rc = create(shape, g);
     if (rc) {
-        sasnav_gpu_destroy(g);
+        gpu_destroy(g);
         return rc;
     }
     *out = g;
     return SASNAV_OK;
 }
 
-static int same_shape(const sasnav_gpu *g, const sasnav_op_view *v)
+static int same_shape(const gpu_ctx *g, const op_view *v)
 {
     return v->n_points == g->np && v->n_rx == g->n_rx && v->n_samples == g->ns && v->pad == g->pad &&
            v->mp == g->mp && v->lf == g->lf && v->ext == g->ext && v->wpad == g->wpad &&
            v->kmax == g->kmax && v->n_pairs == g->n_pairs;
 }
 
-extern "C" int sasnav_gpu_set_op(sasnav_gpu *g, int which, const sasnav_op_view *v)
+extern "C" int gpu_set_op(gpu_ctx *g, int which, const op_view *v)
 {
     if (!g || !v || which < 0 || which > 1) return sasnav_set_error(SASNAV_ERR_ARG, "GPU: bad set_op arguments");
     if (!same_shape(g, v)) return sasnav_set_error(SASNAV_ERR_ARG, "GPU: operator of another shape");
@@ -721,14 +730,14 @@ extern "C" int sasnav_gpu_set_op(sasnav_gpu *g, int which, const sasnav_op_view 
     return SASNAV_OK;
 }
 
-static int have_op(const sasnav_gpu *g, int which)
+static int have_op(const gpu_ctx *g, int which)
 {
     if (which < 0 || which > 1 || !g->op[which].serial)
         return sasnav_set_error(SASNAV_ERR_ARG, "GPU: operator %d has no geometry", which);
     return SASNAV_OK;
 }
 
-extern "C" int sasnav_gpu_apply(sasnav_gpu *g, int which, int adj, const float *x, float *out)
+extern "C" int gpu_apply(gpu_ctx *g, int which, int adj, const float *x, float *out)
 {
     if (!g || !x || !out) return sasnav_set_error(SASNAV_ERR_ARG, "GPU: NULL argument");
     int rc = have_op(g, which);
@@ -744,7 +753,7 @@ extern "C" int sasnav_gpu_apply(sasnav_gpu *g, int which, int adj, const float *
     return SASNAV_OK;
 }
 
-extern "C" int sasnav_gpu_cgls(sasnav_gpu *g, int which, const float *data, int k, double tikhonov,
+extern "C" int gpu_cgls(gpu_ctx *g, int which, const float *data, int k, double tikhonov,
                                float *x)
 {
     if (!g || !data || !x || k < 0 || !(tikhonov >= 0))
@@ -762,7 +771,7 @@ extern "C" int sasnav_gpu_cgls(sasnav_gpu *g, int which, const float *data, int 
 /* The evaluation's device work, from w0->psi = rho_p and g->data_q; ends
  * on stream 0 (stream 1 joined back), with rho_q in g->rho_q, psi_p in
  * ws[0].psi and psi_q in ws[1].psi. */
-static int enqueue_eval(sasnav_gpu *g, int k, int i, double tikhonov)
+static int enqueue_eval(gpu_ctx *g, int k, int i, double tikhonov)
 {
     size_t np = (size_t)g->np;
     chain_ws *w0 = &g->ws[0], *w1 = &g->ws[1];
@@ -790,7 +799,7 @@ static int enqueue_eval(sasnav_gpu *g, int k, int i, double tikhonov)
 
 /* Captures enqueue_eval into g->graph (stream capture of stream 0, which
  * forks stream 1 and joins it back). */
-static int capture(sasnav_gpu *g, int k, int i, double tikhonov)
+static int capture(gpu_ctx *g, int k, int i, double tikhonov)
 {
     cudaStream_t st = g->ws[0].st;
     CK(cudaStreamBeginCapture(st, cudaStreamCaptureModeThreadLocal));
@@ -811,7 +820,7 @@ static int capture(sasnav_gpu *g, int k, int i, double tikhonov)
     return SASNAV_OK;
 }
 
-extern "C" int sasnav_gpu_eval(sasnav_gpu *g, const float *data_q, const float *rho_p, int k, int i,
+extern "C" int gpu_eval(gpu_ctx *g, const float *data_q, const float *rho_p, int k, int i,
                                double tikhonov, float *rho_q, float *psi_p, float *psi_q)
 {
     if (!g || !data_q || !rho_p || !rho_q || !psi_p || !psi_q || k < 0 || i < 0 || !(tikhonov >= 0))
@@ -849,23 +858,23 @@ extern "C" int sasnav_gpu_eval(sasnav_gpu *g, const float *data_q, const float *
     return SASNAV_OK;
 }
 
-static int use_device_geometry = 1; /* sasnav_gpu_use_device_geometry */
+static int use_device_geometry = 1; /* gpu_use_device_geometry */
 
-extern "C" void sasnav_gpu_use_device_geometry(int on) { use_device_geometry = on != 0; }
-extern "C" int sasnav_gpu_device_geometry(void) { return use_device_geometry; }
+extern "C" void gpu_use_device_geometry(int on) { use_device_geometry = on != 0; }
+extern "C" int gpu_device_geometry(void) { return use_device_geometry; }
 
 /* A serial no operator holds: the pairs were computed on the device. */
 #define DEVICE_PLACED ((unsigned long)-1)
 
 /* Bits of the sort keys l (lf + 1) + index < n_rx (lf + 1). */
-static int key_bits(const sasnav_gpu *g)
+static int key_bits(const gpu_ctx *g)
 {
     int nc = g->n_rx * (g->lf + 1), bits = 1;
     while (bits < 31 && (1 << bits) < nc) bits++;
     return bits;
 }
 
-extern "C" int sasnav_gpu_set_points(sasnav_gpu *g, const sasnav_op_geometry_consts *c)
+extern "C" int gpu_set_points(gpu_ctx *g, const op_geometry_consts *c)
 {
     if (!g || !c || !c->x || !c->y || !c->tap_coef || c->tap_degree < 0)
         return sasnav_set_error(SASNAV_ERR_ARG, "GPU: bad set_points arguments");
@@ -874,7 +883,7 @@ extern "C" int sasnav_gpu_set_points(sasnav_gpu *g, const sasnav_op_geometry_con
     if (!g->px) {
         CK(cudaMalloc((void **)&g->px, np * sizeof(double)));
         CK(cudaMalloc((void **)&g->py, np * sizeof(double)));
-        CK(cudaMalloc((void **)&g->chan, (size_t)g->n_rx * sizeof(sasnav_op_channel_geometry)));
+        CK(cudaMalloc((void **)&g->chan, (size_t)g->n_rx * sizeof(op_channel_geometry)));
         CK(cudaMalloc((void **)&g->keys_in, n * sizeof(int)));
         CK(cudaMalloc((void **)&g->keys_out, n * sizeof(int)));
         CK(cudaMalloc((void **)&g->vals_in, n * sizeof(int)));
@@ -910,7 +919,7 @@ extern "C" int sasnav_gpu_set_points(sasnav_gpu *g, const sasnav_op_geometry_con
     return SASNAV_OK;
 }
 
-extern "C" int sasnav_gpu_place(sasnav_gpu *g, int which, const sasnav_op_channel_geometry *channels)
+extern "C" int gpu_place(gpu_ctx *g, int which, const op_channel_geometry *channels)
 {
     if (!g || !channels || which < 0 || which > 1)
         return sasnav_set_error(SASNAV_ERR_ARG, "GPU: bad place arguments");
@@ -920,7 +929,7 @@ extern "C" int sasnav_gpu_place(sasnav_gpu *g, int which, const sasnav_op_channe
     cudaStream_t st = g->ws[0].st;
     int np = g->np, lf = g->lf;
     int n = g->n_rx * np, nc = g->n_rx * (lf + 1), end_bit = key_bits(g);
-    CK(cudaMemcpyAsync(g->chan, channels, (size_t)g->n_rx * sizeof(sasnav_op_channel_geometry),
+    CK(cudaMemcpyAsync(g->chan, channels, (size_t)g->n_rx * sizeof(op_channel_geometry),
                        cudaMemcpyHostToDevice, st));
     CK(cudaMemsetAsync(g->counts, 0, (size_t)nc * sizeof(int), st));
     CK(cudaMemsetAsync(g->near, 0, sizeof(int), st));
@@ -944,4 +953,4 @@ extern "C" int sasnav_gpu_place(sasnav_gpu *g, int which, const sasnav_op_channe
     return SASNAV_OK;
 }
 
-extern "C" const char *sasnav_gpu_name(const sasnav_gpu *g) { return g ? g->name : ""; }
+extern "C" const char *gpu_name(const gpu_ctx *g) { return g ? g->name : ""; }

@@ -22,59 +22,63 @@
 extern "C" {
 #endif
 
-typedef struct sasnav_gpu sasnav_gpu;
+typedef struct gpu_ctx gpu_ctx;
 
 /* Complex vectors are interleaved (re, im) floats (sasnav_cfloat's layout;
  * the CUDA side has no C complex type). */
 
+/* SASNAV_OK where a CUDA device is usable, SASNAV_ERR_UNSUPPORTED (with a
+ * message saying why) otherwise. */
+int gpu_check_device(void);
+
 /* A context for operators shaped like `shape` (points, channels, samples,
- * grids: sasnav_op_view_get). SASNAV_ERR_UNSUPPORTED without a usable
+ * grids: op_view_get). SASNAV_ERR_UNSUPPORTED without a usable
  * device. */
-int sasnav_gpu_create(const sasnav_op_view *shape, sasnav_gpu **out);
-void sasnav_gpu_destroy(sasnav_gpu *g);
+int gpu_create(const op_view *shape, gpu_ctx **out);
+void gpu_destroy(gpu_ctx *g);
 
 /* Copies op's current geometry to the device as operator `which` (0: p,
  * 1: q), unless the copy already holds it. */
-int sasnav_gpu_set_op(sasnav_gpu *g, int which, const sasnav_op_view *op);
+int gpu_set_op(gpu_ctx *g, int which, const op_view *op);
 
 /* out = T x (adjoint = 0: x has n_points entries, out n_rx x n_samples) or
  * T^H x (adjoint = 1) with operator `which`; host arrays (checks, benches). */
-int sasnav_gpu_apply(sasnav_gpu *g, int which, int adjoint, const float *x, float *out);
+int gpu_apply(gpu_ctx *g, int which, int adjoint, const float *x, float *out);
 
 /* x = T^+ data by k CGLS iterations with operator `which` (sasnav_cgls). */
-int sasnav_gpu_cgls(sasnav_gpu *g, int which, const float *data, int k, double tikhonov,
+int gpu_cgls(gpu_ctx *g, int which, const float *data, int k, double tikhonov,
                     float *x);
 
 /* The evaluation: rho_q = T_q^+ data_q (k iterations), psi_p = (Q_p
  * Q_q)^i rho_p, psi_q = (Q_q Q_p)^i rho_q, Q = T^+ T; host arrays (rho_q,
  * psi_p, psi_q: n_points each). */
-int sasnav_gpu_eval(sasnav_gpu *g, const float *data_q, const float *rho_p, int k, int i,
+int gpu_eval(gpu_ctx *g, const float *data_q, const float *rho_p, int k, int i,
                     double tikhonov, float *rho_q, float *psi_p, float *psi_q);
 
 /* Device-side geometry (instead of copying the CPU operator's pairs after
- * its set_geometry): sasnav_gpu_set_points once per context with the
- * operator's constants (sasnav_op_geometry_consts_get), then
- * sasnav_gpu_place per hypothesis with the channel geometries
- * (sasnav_op_channel_geometry_get): the pairs (fine index, taps, G) are
+ * its set_geometry): gpu_set_points once per context with the
+ * operator's constants (op_geometry_consts_get), then
+ * gpu_place per hypothesis with the channel geometries
+ * (op_channel_geometry_get): the pairs (fine index, taps, G) are
  * computed on the device by set_geometry's formulas, in double, and sorted
  * there (stable radix sort). SASNAV_ERR_GEOMETRY where a point coincides
  * with a sensor. */
-int sasnav_gpu_set_points(sasnav_gpu *g, const sasnav_op_geometry_consts *c);
-int sasnav_gpu_place(sasnav_gpu *g, int which, const sasnav_op_channel_geometry *channels);
+int gpu_set_points(gpu_ctx *g, const op_geometry_consts *c);
+int gpu_place(gpu_ctx *g, int which, const op_channel_geometry *channels);
 
 /* Whether the estimator places q's operator on the device (1, the default)
  * or copies the CPU operator's pairs (0). Not thread-safe: set it before
  * use. */
-void sasnav_gpu_use_device_geometry(int on);
-int sasnav_gpu_device_geometry(void);
+void gpu_use_device_geometry(int on);
+int gpu_device_geometry(void);
 
 /* Whether contexts created from now on run the evaluation as one captured
  * CUDA graph (1, the default) or launch its ~4,700 steps one by one (0;
  * the same results: for benches). Not thread-safe: set it before use. */
-void sasnav_gpu_use_graphs(int on);
+void gpu_use_graphs(int on);
 
 /* The device's name (for reports); "" without a context. */
-const char *sasnav_gpu_name(const sasnav_gpu *g);
+const char *gpu_name(const gpu_ctx *g);
 
 #ifdef __cplusplus
 }

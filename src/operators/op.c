@@ -73,7 +73,7 @@
 #endif
 #endif
 
-#define BLOCK SASNAV_OP_BLOCK  /* points per block of the pair layout (64) */
+#define BLOCK OP_BLOCK  /* points per block of the pair layout (64) */
 #define MAX_SAMPLES (1 << 26)  /* window samples (keeps every index in int) */
 #define MIN_SENSOR_DISTANCE 1e-9
 
@@ -1144,19 +1144,19 @@ void sasnav_op_delay_span(const sasnav_op *op, double *first, double *last)
     *first = op->grid_start + half * op->h;
     *last = op->grid_start + (op->lf - half) * op->h;
 }
-int sasnav_op_view_get(const sasnav_op *op, sasnav_op_view *v)
+int op_view_get(const sasnav_op *op, op_view *v)
 {
     if (!op || !v) return sasnav_set_error(SASNAV_ERR_ARG, "op view: NULL argument");
     if (!op->have_geometry)
         return sasnav_set_error(SASNAV_ERR_ARG, "op view: sasnav_op_set_geometry has not succeeded");
-    *v = (sasnav_op_view){op->n_points, op->n_rx, op->n_samples, op->pad, op->mp, op->lf,
+    *v = (op_view){op->n_points, op->n_rx, op->n_samples, op->pad, op->mp, op->lf,
                           op->ext, op->wpad, op->kmax, op->n_blocks, op->n_pairs, op->index,
                           op->taps, op->green, op->spectral, op->serial};
     return SASNAV_OK;
 }
 
-int sasnav_op_channel_geometry_get(const sasnav_op *op, const sasnav_ping_pose *poses,
-                                   int per_channel, sasnav_op_channel_geometry *out)
+int op_channel_geometry_get(const sasnav_op *op, const sasnav_ping_pose *poses,
+                                   int per_channel, op_channel_geometry *out)
 {
     if (!op || !poses || !out) return sasnav_set_error(SASNAV_ERR_ARG, "op: NULL argument");
     int n_pose = per_channel ? op->n_rx : 1;
@@ -1167,20 +1167,20 @@ int sasnav_op_channel_geometry_get(const sasnav_op *op, const sasnav_ping_pose *
     int own = per_channel || op->array.per_channel;
     for (int l = 0; l < op->n_rx; l++) {
         ping_geometry g = make_geometry(op, &poses[n_pose > 1 ? l : 0], own ? l : 0);
-        out[l] = (sasnav_op_channel_geometry){g.tx_x, g.tx_y, g.tx_cos, g.tx_sin, g.tx_aperture,
+        out[l] = (op_channel_geometry){g.tx_x, g.tx_y, g.tx_cos, g.tx_sin, g.tx_aperture,
                                               g.ar_x, g.ar_y, g.ar_cos, g.ar_sin, g.rx_aperture,
                                               g.tx_height, g.rx_height, op->array.rx_u[l]};
     }
     return SASNAV_OK;
 }
 
-int sasnav_op_geometry_consts_get(const sasnav_op *op, sasnav_op_geometry_consts *out)
+int op_geometry_consts_get(const sasnav_op *op, op_geometry_consts *out)
 {
     if (!op || !out) return sasnav_set_error(SASNAV_ERR_ARG, "op: NULL argument");
     /* the constants of setup_block */
     double half = 0.5 * op->kernel.width, u_max = op->lf - half;
     attenuation_coefs att = attenuation_model(op->sys.attenuation);
-    *out = (sasnav_op_geometry_consts){op->x, op->y, 1.0 / op->sys.sound_speed, 1.0 / op->h,
+    *out = (op_geometry_consts){op->x, op->y, 1.0 / op->sys.sound_speed, 1.0 / op->h,
                                        2.0 * op->sys.f0, op->grid_start, half, u_max,
                                        u_max - half, att.exploding, att.spherical, att.none,
                                        op->tap_degree, op->tap_coef};

@@ -15,22 +15,22 @@
 #include "sasnav/geometry.h"
 typedef struct sasnav_op sasnav_op;
 
-#define SASNAV_OP_BLOCK 64 /* points per block of the pair layout (op.c) */
+#define OP_BLOCK 64 /* points per block of the pair layout (op.c) */
 
 typedef struct {
     int n_points, n_rx, n_samples;
     int pad, mp, lf, ext; /* coarse offset, coarse and fine lengths, fine extension */
     int wpad, kmax, n_blocks;
-    size_t n_pairs;       /* n_blocks x n_rx x SASNAV_OP_BLOCK */
+    size_t n_pairs;       /* n_blocks x n_rx x OP_BLOCK */
     /* Pair (l, n) at ((n / BLOCK) * n_rx + l) * BLOCK + n % BLOCK: its first
      * fine index, wpad taps and G (re, im); 2 kmax + 1 spectral weights. */
     const int32_t *index;
     const float *taps, *green, *spectral;
     unsigned long serial; /* 0: no geometry set */
-} sasnav_op_view;
+} op_view;
 
 /* Fills *v; SASNAV_ERR_ARG without a geometry. */
-int sasnav_op_view_get(const sasnav_op *op, sasnav_op_view *v);
+int op_view_get(const sasnav_op *op, op_view *v);
 
 /* What set_geometry computes the pairs from, for an implementation that
  * computes them elsewhere (src/gpu/): per channel, its transmitter and
@@ -40,7 +40,7 @@ typedef struct {
     double tx_x, tx_y, tx_cos, tx_sin, tx_aperture;
     double ar_x, ar_y, ar_cos, ar_sin, rx_aperture;
     double tx_height, rx_height, rx_u;
-} sasnav_op_channel_geometry;
+} op_channel_geometry;
 
 /* ... and the operator's constants: the points, the delay-to-fine-grid map
  * u = (tau - start) inv_h, the kept range half <= u <= u_max (v clamped to
@@ -52,13 +52,13 @@ typedef struct {
     double att_exploding, att_spherical, att_none;
     int tap_degree;
     const float *tap_coef;
-} sasnav_op_geometry_consts;
+} op_geometry_consts;
 
 /* The channel geometries (n_rx entries) set_geometry (per_channel = 0:
  * poses[0] for every channel) or set_channels (per_channel = 1: poses[l])
  * would use; SASNAV_ERR_ARG for a non-finite pose. */
-int sasnav_op_channel_geometry_get(const sasnav_op *op, const sasnav_ping_pose *poses,
-                                   int per_channel, sasnav_op_channel_geometry *out);
-int sasnav_op_geometry_consts_get(const sasnav_op *op, sasnav_op_geometry_consts *out);
+int op_channel_geometry_get(const sasnav_op *op, const sasnav_ping_pose *poses,
+                                   int per_channel, op_channel_geometry *out);
+int op_geometry_consts_get(const sasnav_op *op, op_geometry_consts *out);
 
 #endif

@@ -126,10 +126,12 @@ static int overlapping_phase_centres(const double *pc, int n, double along)
     return k;
 }
 
-/* Codes that mean the navigation cannot go on (not a property of one pair). */
+/* Codes that mean the navigation cannot go on (not a property of one pair;
+ * unsupported: e.g. --gpu without a usable device). */
 static int fatal_code(int rc)
 {
-    return rc == SASNAV_ERR_NOMEM || rc == SASNAV_ERR_FFT || rc == SASNAV_ERR_INTERNAL;
+    return rc == SASNAV_ERR_NOMEM || rc == SASNAV_ERR_FFT || rc == SASNAV_ERR_INTERNAL ||
+           rc == SASNAV_ERR_UNSUPPORTED;
 }
 
 typedef struct {
