@@ -596,8 +596,6 @@ int sasnav_pair_set_data_run(sasnav_pair *pr, const sasnav_run *run, int p, int 
     return sasnav_pair_set_data_channels(pr, data_p, data_q, nominal, lp, lq);
 }
 
-/* Places q's operator at the hypothesised motion error (skipped when it is
- * already there). */
 /* q's sensors at the hypothesised motion error: T_q(sigma) = q's EPCA
  * geometry (or its channels, pr->per_channel) placed at sigma = nominal +
  * error; poses[0] or poses[0 .. n_rx - 1]. */
@@ -616,6 +614,8 @@ static int same_pose(sasnav_pose a, sasnav_pose b)
     return a.x == b.x && a.y == b.y && a.theta == b.theta;
 }
 
+/* Places q's (CPU) operator at the hypothesised motion error (skipped when
+ * it is already there). */
 static int place_q(sasnav_pair *pr, int level, sasnav_pose error)
 {
     pair_level *own = ops_owner(pr, level);
@@ -691,9 +691,11 @@ static int intersect_both(sasnav_pair *pr, pair_level *lv, sasnav_op *op_p, sasn
 
 #ifdef SASNAV_HAVE_CUDA
 /* rho_q, psi_p and psi_q of the evaluation on the GPU (src/gpu/): the same
- * steps as the CPU path below, the operators copied to the device when
- * their geometry changed. The context belongs to the level that owns the
- * operators. Applications are counted as on the CPU. */
+ * steps as the CPU path. p's operator is copied to the device (once per
+ * geometry); q's pairs are computed there at each new hypothesis, or, with
+ * gpu_use_device_geometry(0), placed on the CPU and copied. The context
+ * belongs to the level that owns the operators. Applications are counted
+ * as on the CPU. */
 static int gpu_project(sasnav_pair *pr, int level, pair_level *lv, sasnav_pose error)
 {
     pair_level *own = ops_owner(pr, level);
@@ -734,9 +736,8 @@ static int gpu_project(sasnav_pair *pr, int level, pair_level *lv, sasnav_pose e
         if (!rc) rc = gpu_set_op(own->gpu, 1, &vq);
     }
     if (!rc)
-        rc = gpu_eval(own->gpu, (const float *)pr->data_q, (const float *)lv->rho_p, lv->k,
-                             lv->i, pr->opts.tikhonov, (float *)lv->rho_q, (float *)lv->psi_p,
-                             (float *)lv->psi_q);
+        rc = gpu_eval(own->gpu, (const float *)pr->data_q, (const float *)lv->rho_p, lv->k, lv->i,
+                      pr->opts.tikhonov, (float *)lv->rho_q, (float *)lv->psi_p, (float *)lv->psi_q);
     if (rc) return rc;
     pr->applications += cgls_cost(lv->k) + 4L * lv->i * (1 + cgls_cost(lv->k));
     return SASNAV_OK;

@@ -2,17 +2,19 @@
  * -DSASNAV_CUDA=ON, which defines SASNAV_HAVE_CUDA; docs/estimator.md,
  * "GPU").
  *
- * One context per estimator level holds device copies of the level's two
- * operators (p's and q's geometry, copied again only when the operator's
- * geometry changed: op_view.h's serial) and runs what sasnav_pair_eval runs
- * on the CPU: rho_q = T_q^+ phi_q, then psi_p = (Q_p Q_q)^i rho_p and
- * psi_q = (Q_q Q_p)^i rho_q, the two chains on two streams. The operator is
- * the same NUFFT as src/operators/op.c, computed in another order: the
- * spread gathers, per fine-grid sample, the pairs sorted by fine index
- * (deterministic: no atomics), the adjoint interpolates per point over the
- * channels, the FFTs are cuFFT's. Results agree with the CPU's to float
- * rounding, not to the bit; for a given GPU and build they are the same
- * bits from run to run. */
+ * One context per estimator level holds the level's two operators on the
+ * device (p's copied from the CPU operator, again only when its geometry
+ * changed: op_view.h's serial; q's computed on the device at each
+ * hypothesis, gpu_place, or copied) and runs what sasnav_pair_eval runs on
+ * the CPU: rho_q = T_q^+ phi_q, then psi_p = (Q_p Q_q)^i rho_p and psi_q =
+ * (Q_q Q_p)^i rho_q, the two chains on two streams, captured once as a CUDA
+ * graph. The operator is the same NUFFT as src/operators/op.c, computed in
+ * another order: the spread gathers, per fine-grid sample, the pairs sorted
+ * by fine index (no floating-point atomics), the adjoint interpolates per
+ * point over the channels, the FFTs are cuFFT's. Results agree with the
+ * CPU's to float rounding, not to the bit; for a given GPU and build they
+ * should be the same bits from run to run (fixed reduction orders, a
+ * stable sort). Internal: not part of the installed API. */
 #ifndef SASNAV_GPU_EVAL_H
 #define SASNAV_GPU_EVAL_H
 
