@@ -7,10 +7,15 @@
 #   sh bench/gpu/device-compare.sh DIR OUT
 # DIR: bench_gpu and bench_navigate_gpu (this version, -DSASNAV_CUDA=ON);
 # test_gpu_dev (tests/test_gpu.c linked against the core library alone,
-# testutil's two counters and summary written out); oldpair and oldnav
-# (2126057's bench_pair and a navigate driver built against its library:
-# docs/estimator.md, "GPU"); the shared libraries the machine lacks
-# (libgomp, libfftw3f, libnlopt). Logs go to OUT.
+# testutil's two counters and summary written out); oldpair and oldnav,
+# 2126057's bench/bench_pair.c and bench/gpu/navigate_driver.c built against
+# that version's build tree OLD:
+#   gcc -O2 -std=c11 -D_POSIX_C_SOURCE=200809L -IOLD/include -IOLD/build/include \
+#       -IOLD/src OLD/bench/bench_pair.c OLD/build/libsasnav.a -lfftw3f -lnlopt \
+#       -fopenmp -lm -o DIR/oldpair
+#   (navigate_driver.c: the line in its header, -o DIR/oldnav);
+# and the shared libraries the machine lacks (libgomp, libfftw3f, libnlopt).
+# Logs go to OUT.
 set -u
 dir=$1
 out=$2
