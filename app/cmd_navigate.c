@@ -468,7 +468,7 @@ int cmd_navigate(int argc, char **argv)
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         /* Options of the pair navigation alone (refused with --virtual-array). */
-        if (strchr("mLyfAFUNBSRMC", opt)) n_general++;
+        if (strchr("mLyfAFUNBSRMCg", opt)) n_general++;
         have_cross |= opt == 'X';
         have_range |= opt == 'E';
         switch (opt) {
@@ -602,6 +602,8 @@ int cmd_navigate(int argc, char **argv)
     }
     no.pair.k = (int)k;
     no.pair.i = (int)iters;
+    if (no.pair.gpu && no.method != SASNAV_METHOD_SUBSPACE)
+        return cli_usage("navigate", "--gpu applies to the subspace method (--method subspace)");
     if (sasnav_pair_opts_check(&no.pair))
         return cli_usage("navigate", "%s", sasnav_last_error());
     no.nthreads = (int)threads;

@@ -25,6 +25,9 @@
 #include "sasnav/error.h"
 #include "gpu/gpu_eval.h"
 
+/* The pair layout's block of points is 64 here (pair_of, k_spread, k_geometry). */
+static_assert(OP_BLOCK == 64, "gpu_eval.cu assumes blocks of 64 points");
+
 #define NRED 120  /* blocks of a norm's first pass (fixed: same sums every run) */
 #define RTH 256   /* threads per block */
 
@@ -81,7 +84,8 @@ typedef struct {
 struct gpu_ctx {
     int np, n_rx, ns, pad, mp, lf, ext, wpad, kmax, n_blocks;
     /* Device-side geometry (gpu_set_points, gpu_place). */
-    int have_points;
+    int have_points, points_ready; /* have_points: set_points succeeded;
+                                      points_ready: its buffers exist */
     geom_consts gk;
     double *px, *py;
     float *tap_coef;
@@ -105,6 +109,8 @@ struct gpu_ctx {
     double graph_lambda;
     char name[256];
 };
+
+static void free_points(gpu_ctx *g);
 
 /* ------------------------------------------------------------------------ */
 /* Kernels. */
@@ -551,18 +557,8 @@ extern "C" void gpu_destroy(gpu_ctx *g)
         free_op(&g->op[c]);
         free_ws(&g->ws[c]);
     }
-    cudaFree(g->px);
-    cudaFree(g->py);
+    free_points(g);
     cudaFree(g->tap_coef);
-    cudaFree(g->chan);
-    cudaFree(g->keys_in);
-    cudaFree(g->keys_out);
-    cudaFree(g->vals_in);
-    cudaFree(g->counts);
-    cudaFree(g->sums);
-    cudaFree(g->near);
-    cudaFree(g->sort_temp);
-    if (g->h_near) cudaFreeHost(g->h_near);
     cudaFree(g->spectral);
     cudaFree(g->rho_q);
     cudaFree(g->data_q);
@@ -603,6 +599,8 @@ static int make_ws(gpu_ctx *g, chain_ws *w)
     return SASNAV_OK;
 }
 
+__global__ void k_probe(void) {}
+
 extern "C" int gpu_check_device(void)
 {
     int count = 0;
@@ -611,6 +609,20 @@ extern "C" int gpu_check_device(void)
         cudaGetLastError(); /* clear the error state */
         return sasnav_set_error(SASNAV_ERR_UNSUPPORTED, "GPU: no usable CUDA device (%s)",
                                 e != cudaSuccess ? cudaGetErrorString(e) : "none found");
+    }
+    /* code for this device's architecture? (a build for compute capability
+     * 9.0 only cannot launch on an older GPU: CMAKE_CUDA_ARCHITECTURES) */
+    k_probe<<<1, 1>>>();
+    e = cudaGetLastError();
+    if (e != cudaSuccess) {
+        int dev = 0, major = 0, minor = 0;
+        cudaGetDevice(&dev);
+        cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, dev);
+        cudaDeviceGetAttribute(&minor, cudaDevAttrComputeCapabilityMinor, dev);
+        return sasnav_set_error(SASNAV_ERR_UNSUPPORTED,
+                                "GPU: cannot run on device %d (compute capability %d.%d): %s; "
+                                "configure with -DCMAKE_CUDA_ARCHITECTURES for it",
+                                dev, major, minor, cudaGetErrorString(e));
     }
     return SASNAV_OK;
 }
@@ -634,7 +646,8 @@ static int create(const op_view *v, gpu_ctx *g)
     g->n_blocks = v->n_blocks;
     g->n_pairs = v->n_pairs;
     g->nd = (size_t)v->n_rx * (size_t)v->n_samples;
-    if (2 * g->kmax + 1 > g->mp || g->ext > g->lf || g->pad + g->ns > g->mp || g->n_pairs > INT_MAX)
+    if (2 * g->kmax + 1 > g->mp || g->ext > g->lf || g->pad + g->ns > g->mp || g->n_pairs > INT_MAX ||
+        (size_t)g->n_rx * (size_t)(g->lf + 1) > INT_MAX || (size_t)g->n_rx * (size_t)g->np > INT_MAX)
         return sasnav_set_error(SASNAV_ERR_UNSUPPORTED, "GPU: operator grids out of range");
     CK(cudaMalloc((void **)&g->spectral, (2 * (size_t)g->kmax + 1) * sizeof(float)));
     g->no_graph = !use_graphs;
@@ -874,31 +887,69 @@ static int key_bits(const gpu_ctx *g)
     return bits;
 }
 
+/* The buffers of the device-side geometry (gpu_set_points). */
+static void free_points(gpu_ctx *g)
+{
+    cudaFree(g->px);
+    cudaFree(g->py);
+    cudaFree(g->chan);
+    cudaFree(g->keys_in);
+    cudaFree(g->keys_out);
+    cudaFree(g->vals_in);
+    cudaFree(g->counts);
+    cudaFree(g->sums);
+    cudaFree(g->near);
+    cudaFree(g->sort_temp);
+    if (g->h_near) cudaFreeHost(g->h_near);
+    g->px = g->py = NULL;
+    g->chan = NULL;
+    g->keys_in = g->keys_out = g->vals_in = g->counts = g->sums = g->near = g->h_near = NULL;
+    g->sort_temp = NULL;
+    g->sort_bytes = 0;
+    g->points_ready = g->have_points = 0;
+}
+
+static int alloc_points(gpu_ctx *g, size_t np, size_t n, size_t nc)
+{
+    CK(cudaMalloc((void **)&g->px, np * sizeof(double)));
+    CK(cudaMalloc((void **)&g->py, np * sizeof(double)));
+    CK(cudaMalloc((void **)&g->chan, (size_t)g->n_rx * sizeof(op_channel_geometry)));
+    CK(cudaMalloc((void **)&g->keys_in, n * sizeof(int)));
+    CK(cudaMalloc((void **)&g->keys_out, n * sizeof(int)));
+    CK(cudaMalloc((void **)&g->vals_in, n * sizeof(int)));
+    CK(cudaMalloc((void **)&g->counts, nc * sizeof(int)));
+    CK(cudaMalloc((void **)&g->sums, nc * sizeof(int)));
+    CK(cudaMalloc((void **)&g->near, sizeof(int)));
+    CK(cudaMallocHost((void **)&g->h_near, sizeof(int)));
+    size_t b1 = 0, b2 = 0;
+    CK(cub::DeviceRadixSort::SortPairs(NULL, b1, g->keys_in, g->keys_out, g->vals_in, g->vals_in,
+                                       (int)n, 0, key_bits(g)));
+    CK(cub::DeviceScan::InclusiveSum(NULL, b2, g->counts, g->sums, (int)nc));
+    g->sort_bytes = b1 > b2 ? b1 : b2;
+    CK(cudaMalloc(&g->sort_temp, g->sort_bytes));
+    g->points_ready = 1;
+    return SASNAV_OK;
+}
+
 extern "C" int gpu_set_points(gpu_ctx *g, const op_geometry_consts *c)
 {
     if (!g || !c || !c->x || !c->y || !c->tap_coef || c->tap_degree < 0)
         return sasnav_set_error(SASNAV_ERR_ARG, "GPU: bad set_points arguments");
     size_t np = (size_t)g->np, n = (size_t)g->n_rx * np, nc = (size_t)g->n_rx * (size_t)(g->lf + 1);
     size_t ncoef = (size_t)(c->tap_degree + 1) * (size_t)g->wpad;
-    if (!g->px) {
-        CK(cudaMalloc((void **)&g->px, np * sizeof(double)));
-        CK(cudaMalloc((void **)&g->py, np * sizeof(double)));
-        CK(cudaMalloc((void **)&g->chan, (size_t)g->n_rx * sizeof(op_channel_geometry)));
-        CK(cudaMalloc((void **)&g->keys_in, n * sizeof(int)));
-        CK(cudaMalloc((void **)&g->keys_out, n * sizeof(int)));
-        CK(cudaMalloc((void **)&g->vals_in, n * sizeof(int)));
-        CK(cudaMalloc((void **)&g->counts, nc * sizeof(int)));
-        CK(cudaMalloc((void **)&g->sums, nc * sizeof(int)));
-        CK(cudaMalloc((void **)&g->near, sizeof(int)));
-        CK(cudaMallocHost((void **)&g->h_near, sizeof(int)));
-        size_t b1 = 0, b2 = 0;
-        CK(cub::DeviceRadixSort::SortPairs(NULL, b1, g->keys_in, g->keys_out, g->vals_in, g->vals_in,
-                                           (int)n, 0, key_bits(g)));
-        CK(cub::DeviceScan::InclusiveSum(NULL, b2, g->counts, g->sums, (int)nc));
-        g->sort_bytes = b1 > b2 ? b1 : b2;
-        CK(cudaMalloc(&g->sort_temp, g->sort_bytes));
+    g->have_points = 0; /* until every copy below has succeeded */
+    if (!g->points_ready) {
+        /* all or nothing: a failure frees what was made, so that a later
+         * call starts again from scratch */
+        int rc = alloc_points(g, np, n, nc);
+        if (rc) {
+            free_points(g);
+            return rc;
+        }
     }
-    /* pairs of the last block's missing points stay zero */
+    /* pairs of the last block's missing points stay zero; the operators'
+     * zeroed pairs are no geometry */
+    g->op[0].serial = g->op[1].serial = 0;
     cudaStream_t st = g->ws[0].st;
     for (int c2 = 0; c2 < 2; c2++) {
         CK(cudaMemsetAsync(g->op[c2].index, 0, g->n_pairs * sizeof(int32_t), st));
@@ -915,7 +966,6 @@ extern "C" int gpu_set_points(gpu_ctx *g, const op_geometry_consts *c)
     g->gk = (geom_consts){c->inv_c, c->inv_h, c->two_f0, c->start, c->half, c->u_max, c->v_max,
                           c->att_exploding, c->att_spherical, c->att_none, c->tap_degree};
     g->have_points = 1;
-    g->op[0].serial = g->op[1].serial = 0; /* their zeroed pairs are no geometry */
     return SASNAV_OK;
 }
 
