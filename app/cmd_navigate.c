@@ -23,7 +23,7 @@ static const char *help =
     "                       [--threads N] [--gpu] [--json] [--checkpoint FILE]\n"
     "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
     "       sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]\n"
-    "                       [--iterations N] [--closed] [--keep-length]\n"
+    "                       [--iterations N] [--closed] [--keep-length] [--align-heading]\n"
     "                       [--estimate-yaw] [--k K] [--i I] [--cross-extent M]\n"
     "                       [--range-extent M] [--threads N] [--json] -o nav.h5\n"
     "\n"
@@ -130,6 +130,10 @@ static const char *help =
     "                    track's shape, the input its length (the steps are\n"
     "                    0.5-3 % too long on AirSAS-like layouts; right only\n"
     "                    where the input's length is, docs/airsas.md)\n"
+    "  --align-heading   turn each group's layout so that its pings lie along\n"
+    "                    their headings (a gyro's; no crab): a smooth drift of\n"
+    "                    the input's positions tilts the layouts, and the\n"
+    "                    steps keep the tilt's sway without it (docs/airsas.md)\n"
     "  --estimate-yaw    estimate each step's yaw too (default: held at the\n"
     "                    input navigation's: an omnidirectional group shows\n"
     "                    its yaw only through its length)\n"
@@ -453,7 +457,8 @@ int cmd_navigate(int argc, char **argv)
         {"virtual-array", required_argument, 0, 'V'}, {"stride", required_argument, 0, 'T'},
         {"iterations", required_argument, 0, 'I'}, {"estimate-yaw", no_argument, 0, 'W'},
         {"interleave", required_argument, 0, 'G'}, {"closed", no_argument, 0, 'Z'},
-        {"keep-length", no_argument, 0, 'K'}, {"gpu", no_argument, 0, 'g'},
+        {"keep-length", no_argument, 0, 'K'}, {"align-heading", no_argument, 0, 'H'},
+        {"gpu", no_argument, 0, 'g'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -463,7 +468,7 @@ int cmd_navigate(int argc, char **argv)
     long threads = 0, k = no.pair.k, iters = no.pair.i;
     int json = 0, opt, anchor_truth = 0, have_first = 0, n_general = 0, estimate_yaw = 0;
     long vk = 0, vstride = 0, viters = 2, vinter = 1;
-    int have_cross = 0, have_range = 0, closed = 0, keep_length = 0;
+    int have_cross = 0, have_range = 0, closed = 0, keep_length = 0, align_heading = 0;
     double first[3] = {0, 0, 0};
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
@@ -486,6 +491,7 @@ int cmd_navigate(int argc, char **argv)
         case 'W': estimate_yaw = 1; break;
         case 'Z': closed = 1; break;
         case 'K': keep_length = 1; break;
+        case 'H': align_heading = 1; break;
         case 'G':
             if (cli_parse_int(optarg, 1, 1000, &vinter)) return cli_usage("navigate", "--interleave needs 1..1000");
             break;
@@ -572,13 +578,15 @@ int cmd_navigate(int argc, char **argv)
     if (have_first && anchor_truth)
         return cli_usage("navigate", "--first-pose and --anchor-truth exclude each other");
     const char *input = argv[optind];
-    if (!vk && (vstride || viters != 2 || estimate_yaw || vinter != 1 || closed || keep_length))
-        return cli_usage("navigate", "--interleave, --stride, --iterations, --closed, --keep-length "
-                                     "and --estimate-yaw need --virtual-array");
+    if (!vk && (vstride || viters != 2 || estimate_yaw || vinter != 1 || closed || keep_length ||
+                align_heading))
+        return cli_usage("navigate", "--interleave, --stride, --iterations, --closed, --keep-length, "
+                                     "--align-heading and --estimate-yaw need --virtual-array");
     if (vk) {
         if (n_general)
             return cli_usage("navigate", "--virtual-array takes only --interleave, --stride, "
-                                         "--iterations, --closed, --keep-length, --estimate-yaw, --k, --i, "
+                                         "--iterations, --closed, --keep-length, --align-heading, --estimate-yaw, "
+                                         "--k, --i, "
                                          "--cross-extent, --range-extent, --threads and --json");
         if (cli_mpi_size() > 1)
             return cli_usage("navigate", "--virtual-array runs in one process (use --threads)");
@@ -589,6 +597,7 @@ int cmd_navigate(int argc, char **argv)
         vo.interleave = (int)vinter;
         vo.closed = closed;
         vo.keep_length = keep_length;
+        vo.align_heading = align_heading;
         vo.iterations = (int)viters;
         vo.nthreads = (int)threads;
         vo.pair.k = (int)k;

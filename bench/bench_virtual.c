@@ -224,8 +224,10 @@ int main(int argc, char **argv)
     long s0 = 201, ns = 1;
     double snr = 30.0, pixel = 0, extent = 0.3, drift_mm = 5.0, motion_rms = -1;
     double box[3] = {0.01, 0.01, 0.02};
-    int k = 4, stride = 0, n_pings = 0, first = 0, threads = 0, quiet = 0, free_yaw = 0, iterations = 2, interleave = 1, closed = 0, keep_length = 0;
-    const char *file = NULL, *write_prefix = NULL, *plot_prefix = NULL;
+    int k = 4, stride = 0, n_pings = 0, first = 0, threads = 0, quiet = 0, free_yaw = 0, iterations = 2, interleave = 1, closed = 0, keep_length = 0,
+        align_heading = 0;
+    const char *file = NULL, *write_prefix = NULL, *plot_prefix = NULL, *drift_shape = "smooth",
+               *dump_file = NULL;
     refine_cfg rf = {0, 0, 4, 0, 0.0025, 0.3, 0.012, 0.006, 0};
     for (int a = 1; a < argc; a++) {
         if (bench_seed_option(argc, argv, &a, &s0, &ns, &snr)) continue;
@@ -249,10 +251,19 @@ int main(int argc, char **argv)
             file = argv[++a];
         } else if (!strcmp(argv[a], "--drift") && a + 1 < argc) {
             drift_mm = atof(argv[++a]);
+        } else if (!strcmp(argv[a], "--drift-shape") && a + 1 < argc) {
+            drift_shape = argv[++a];
+            if (strcmp(drift_shape, "smooth") && strcmp(drift_shape, "alternate") && strcmp(drift_shape, "ramp") &&
+                strcmp(drift_shape, "sway") && strcmp(drift_shape, "surge"))
+                goto usage;
         } else if (!strcmp(argv[a], "--closed")) {
             closed = 1;
         } else if (!strcmp(argv[a], "--keep-length")) {
             keep_length = 1;
+        } else if (!strcmp(argv[a], "--dump") && a + 1 < argc) {
+            dump_file = argv[++a];
+        } else if (!strcmp(argv[a], "--align-heading")) {
+            align_heading = 1;
         } else if (!strcmp(argv[a], "--interleave") && a + 1 < argc) {
             interleave = atoi(argv[++a]);
         } else if (!strcmp(argv[a], "--iterations") && a + 1 < argc) {
@@ -290,7 +301,9 @@ int main(int argc, char **argv)
             fprintf(stderr, "usage: bench_virtual [--seeds S0 N] [--snr DB|inf] [--k K] [--stride S]\n"
                             "         [--pings N] [--first P] [--threads T] [--pixel M] [--extent M]\n"
                             "         [--box SURGE,SWAY,YAW] [--iterations N] [--interleave M] [--closed] [--keep-length]\n"
-                            "         [--free-yaw] [--motion-rms M] [--file run.h5 [--drift MM]] [--write-nav PREFIX]\n"
+                            "         [--align-heading]\n"
+                            "         [--free-yaw] [--motion-rms M] [--file run.h5 [--drift MM]\n"
+                            "         [--drift-shape smooth|sway|surge|alternate|ramp]] [--write-nav PREFIX]\n"
                             "         [--plot PREFIX] [--refine | --refine-only] [--sweeps N] [--cg N] [--damping X]\n"
                             "         [--refine-pixel M] [--refine-half M] [--surge-range M] [--sway-range M] [--quiet]\n");
             return 2;
@@ -343,6 +356,14 @@ int main(int argc, char **argv)
                 double u = (double)i / (run->n_pings > 1 ? run->n_pings - 1 : 1);
                 sasnav_pose d = {1e-3 * drift_mm * sin(2.5 * 2 * M_PI * u),
                                  1e-3 * drift_mm * sin(1.5 * 2 * M_PI * u), 0.0};
+                if (!strcmp(drift_shape, "alternate")) /* odd pings moved: exact layouts */
+                    d = (sasnav_pose){1e-3 * drift_mm * (i % 2), 1e-3 * drift_mm * (i % 2), 0.0};
+                else if (!strcmp(drift_shape, "sway")) /* the smooth drift's sway alone */
+                    d.x = 0.0;
+                else if (!strcmp(drift_shape, "surge")) /* its surge alone */
+                    d.y = 0.0;
+                else if (!strcmp(drift_shape, "ramp")) /* a uniform stretch and tilt */
+                    d = (sasnav_pose){1e-3 * drift_mm * u, 1e-3 * drift_mm * u, 0.0};
                 run->nav[i].tx = sasnav_pose_compose(run->nav[i].tx, d);
                 run->nav[i].array = sasnav_pose_compose(run->nav[i].array, d);
             }
@@ -362,6 +383,7 @@ int main(int argc, char **argv)
         vo.interleave = interleave;
         vo.closed = closed;
         vo.keep_length = keep_length;
+        vo.align_heading = align_heading;
         if (rf.only) {
             /* The refinement alone, from the input navigation (errors in
              * the world frame: no alignment). */
@@ -404,6 +426,31 @@ int main(int argc, char **argv)
                        j, vp->first_p, vp->first_q, 1e3 * vp->truth.x, 1e3 * vp->truth.y,
                        1e3 * vp->truth.theta, 1e3 * e[0], 1e3 * e[1], 1e3 * e[2],
                        sasnav_verdict_name(vp->est.verdict), vp->est.eta, vp->est.seconds);
+        }
+        if (dump_file) {
+            /* Per group: input and true centroids; per pair (g -> g + 1):
+             * nominal, estimate, used. One line per group g. */
+            FILE *df = fopen(dump_file, "w");
+            sasnav_ping_pose *sc2 = malloc(sizeof *sc2 * (size_t)k * run->array.n_rx);
+            sasnav_ping_pose *g2 = malloc(sizeof *g2 * (size_t)k);
+            for (int g = 0; df && sc2 && g2 && g < vn.n_groups; g++) {
+                sasnav_pose ct;
+                for (int j = 0; j < k; j++) g2[j] = run->truth[(g * vn.stride + interleave * j) % run->n_pings];
+                sasnav_virtual_layout(&run->array, g2, k, sc2, &ct);
+                const sasnav_pose ci = vn.centroid_in[g];
+                fprintf(df, "%d %.9f %.9f %.9f %.9f %.9f %.9f", g, ci.x, ci.y, ci.theta, ct.x, ct.y, ct.theta);
+                if (g < vn.n_pairs) {
+                    const sasnav_virtual_pair *vp = &vn.pairs[g];
+                    fprintf(df, " %.9f %.9f %.9f %.9f %.9f %.9f %d\n", vp->nominal.x, vp->nominal.y,
+                            vp->nominal.theta, vp->est.displacement.x, vp->est.displacement.y,
+                            vp->est.displacement.theta, vp->used);
+                } else {
+                    fprintf(df, " nan nan nan nan nan nan 0\n");
+                }
+            }
+            free(sc2);
+            free(g2);
+            if (df) fclose(df);
         }
         /* Align both navigations on the first group's true centroid. */
         sasnav_pose c_true, c_in;

@@ -111,6 +111,19 @@ typedef struct {
                                Right only where the input's length is: a
                                drift that returns, not an INS scale-factor
                                error (default 0) */
+    int align_heading;      /* 1: each group's layout (where its pings are
+                               relative to one another) is turned about its
+                               centroid so that the pings' principal axis
+                               lies along their mean heading: the track
+                               inside a group follows the headings (a
+                               gyro's; no crab), its spacing the input's.
+                               A position drift of the input tilts the
+                               layouts of neighbouring groups alike, and
+                               the steps between two such groups keep the
+                               tilt (docs/airsas.md, "Removing a drift");
+                               with this the sway part of the drift is
+                               measured. Wrong where the vehicle crabs
+                               (default 0) */
 } sasnav_virtual_opts;
 
 void sasnav_virtual_default_opts(sasnav_virtual_opts *opts);

@@ -43,8 +43,8 @@ int sasnav_virtual_array(const sasnav_array *array, int k, sasnav_array *out)
 
 /* sasnav_virtual_layout with the run's channel offsets (NULL: none). */
 static int layout_with_offsets(const sasnav_array *array, const sasnav_ping_pose *offset,
-                               const sasnav_ping_pose *poses, int k, sasnav_ping_pose *local,
-                               sasnav_pose *centroid)
+                               const sasnav_ping_pose *poses, int k, int align,
+                               sasnav_ping_pose *local, sasnav_pose *centroid)
 {
     if (!array || !poses || !local || !centroid)
         return sasnav_set_error(SASNAV_ERR_ARG, "virtual layout: NULL argument");
@@ -66,6 +66,34 @@ static int layout_with_offsets(const sasnav_array *array, const sasnav_ping_pose
         local[i].tx = sasnav_pose_between(c, local[i].tx);
         local[i].array = sasnav_pose_between(c, local[i].array);
     }
+    if (align && k >= 2) {
+        /* The pings' positions (each ping's array reference, channel 0) in
+         * the centroid's frame, whose x axis is the pings' mean heading:
+         * their principal axis should be that axis (no crab). Turn the
+         * positions about the centroid by the axis's angle (mod pi); the
+         * headings stay. */
+        double mx = 0, my = 0, sxx = 0, syy = 0, sxy = 0;
+        for (int j = 0; j < k; j++) {
+            mx += local[(size_t)j * n].array.x / k;
+            my += local[(size_t)j * n].array.y / k;
+        }
+        for (int j = 0; j < k; j++) {
+            double dx = local[(size_t)j * n].array.x - mx, dy = local[(size_t)j * n].array.y - my;
+            sxx += dx * dx;
+            syy += dy * dy;
+            sxy += dx * dy;
+        }
+        double phi = 0.5 * atan2(2.0 * sxy, sxx - syy);
+        double cs = cos(phi), sn = sin(phi);
+        for (int i = 0; i < v.n_rx; i++) {
+            sasnav_pose *q[2] = {&local[i].tx, &local[i].array};
+            for (int t = 0; t < 2; t++) {
+                double x = q[t]->x, y = q[t]->y;
+                q[t]->x = cs * x + sn * y;
+                q[t]->y = -sn * x + cs * y;
+            }
+        }
+    }
     *centroid = c;
     return SASNAV_OK;
 }
@@ -73,7 +101,7 @@ static int layout_with_offsets(const sasnav_array *array, const sasnav_ping_pose
 int sasnav_virtual_layout(const sasnav_array *array, const sasnav_ping_pose *poses, int k,
                           sasnav_ping_pose *local, sasnav_pose *centroid)
 {
-    return layout_with_offsets(array, NULL, poses, k, local, centroid);
+    return layout_with_offsets(array, NULL, poses, k, 0, local, centroid);
 }
 
 void sasnav_virtual_default_opts(sasnav_virtual_opts *opts)
@@ -148,11 +176,12 @@ static int estimate_pair(const vctx *c, sasnav_pair *est, sasnav_cfloat *dp, sas
 
 /* Layout and centroid of the group of pings first + m j, j < k, with
  * poses from `nav`; gather: k scratch poses. */
-static int group_layout(const vctx *c, const sasnav_ping_pose *nav, int first,
+static int group_layout(const vctx *c, const sasnav_ping_pose *nav, int first, int align,
                         sasnav_ping_pose *gather, sasnav_ping_pose *local, sasnav_pose *centroid)
 {
     for (int j = 0; j < c->k; j++) gather[j] = nav[(first + c->m * j) % c->run->n_pings];
-    return layout_with_offsets(&c->run->array, c->run->channel_offset, gather, c->k, local, centroid);
+    return layout_with_offsets(&c->run->array, c->run->channel_offset, gather, c->k, align, local,
+                               centroid);
 }
 
 /* One pass over the pairs with `nav` as the input navigation: layouts,
@@ -167,7 +196,7 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
     if (!scratch) return sasnav_set_error(SASNAV_ERR_NOMEM, "virtual arrays: out of memory");
     sasnav_ping_pose *gather = scratch + c->nv;
     for (int g = 0; g < ng && !rc; g++)
-        rc = group_layout(c, nav, g * c->stride, gather, c->layout_in + (size_t)g * c->nv,
+        rc = group_layout(c, nav, g * c->stride, c->o->align_heading, gather, c->layout_in + (size_t)g * c->nv,
                           &out->centroid_in[g]);
     for (int g = 0; g < c->n_pairs && !rc; g++) {
         sasnav_virtual_pair *vp = &out->pairs[g];
@@ -179,8 +208,8 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
         vp->truth = (sasnav_pose){NAN, NAN, NAN};
         if (run->truth) {
             sasnav_pose cp, cq;
-            rc = group_layout(c, run->truth, vp->first_p, gather, scratch, &cp);
-            if (!rc) rc = group_layout(c, run->truth, vp->first_q, gather, scratch, &cq);
+            rc = group_layout(c, run->truth, vp->first_p, 0, gather, scratch, &cp);
+            if (!rc) rc = group_layout(c, run->truth, vp->first_q, 0, gather, scratch, &cq);
             if (!rc) vp->truth = sasnav_pose_between(cp, cq);
         }
     }

@@ -225,7 +225,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                          [--threads N] [--gpu] [--json] [--checkpoint FILE]
                          [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5
          sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]
-                         [--iterations N] [--closed] [--keep-length]
+                         [--iterations N] [--closed] [--keep-length] [--align-heading]
                          [--estimate-yaw] [--k K] [--i I] [--cross-extent M]
                          [--range-extent M] [--threads N] [--json] -o nav.h5
   
@@ -332,6 +332,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       track's shape, the input its length (the steps are
                       0.5-3 % too long on AirSAS-like layouts; right only
                       where the input's length is, docs/airsas.md)
+    --align-heading   turn each group's layout so that its pings lie along
+                      their headings (a gyro's; no crab): a smooth drift of
+                      the input's positions tilts the layouts, and the
+                      steps keep the tilt's sway without it (docs/airsas.md)
     --estimate-yaw    estimate each step's yaw too (default: held at the
                       input navigation's: an omnidirectional group shows
                       its yaw only through its length)
