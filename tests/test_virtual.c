@@ -110,30 +110,47 @@ static void test_circle(void)
     free(p);
 }
 
-static void test_estimate(void)
+/* Moves ping i of the input navigation by d (in the ping's frame). */
+static void move_ping(sasnav_run *run, int i, sasnav_pose d)
+{
+    run->nav[i].tx = sasnav_pose_compose(run->nav[i].tx, d);
+    run->nav[i].array = sasnav_pose_compose(run->nav[i].array, d);
+}
+
+/* Virtual options for the circular preset: k pings a group, one pass, a
+ * 0.3 m grid round the circle's centre. */
+static void circle_opts(sasnav_virtual_opts *vo, int k)
+{
+    sasnav_virtual_default_opts(vo);
+    vo->k = k;
+    vo->iterations = 1;
+    vo->pair.range = 0.85;
+    vo->pair.range_extent = vo->pair.cross_extent = 0.3;
+    vo->pair.box = (sasnav_pose){0.01, 0.01, 0.02};
+}
+
+/* The circular preset, n pings, noise-free and without motion errors
+ * (NULL on failure, counted as a failed check). */
+static sasnav_run *circle_run(int n)
 {
     sasnav_scenario sc;
     CHECK_OK(sasnav_scenario_preset("circular", &sc));
-    sc.traj.n_pings = 16;
+    sc.traj.n_pings = n;
     sc.traj.surge_rms = sc.traj.sway_rms = 0.0;
     sc.snr_db = INFINITY;
     sasnav_run *run = NULL;
     CHECK_OK(sasnav_simulate(&sc, NULL, NULL, &run));
+    return run;
+}
+
+static void test_estimate(void)
+{
+    sasnav_run *run = circle_run(16);
     if (!run) return;
     /* The input navigation: pings 8..15 moved by (+6 mm, -4 mm). */
-    const double ds = 0.006, dw = -0.004;
-    for (int i = 8; i < 16; i++) {
-        sasnav_pose d = {ds, dw, 0.0};
-        run->nav[i].tx = sasnav_pose_compose(run->nav[i].tx, d);
-        run->nav[i].array = sasnav_pose_compose(run->nav[i].array, d);
-    }
+    for (int i = 8; i < 16; i++) move_ping(run, i, (sasnav_pose){0.006, -0.004, 0.0});
     sasnav_virtual_opts vo;
-    sasnav_virtual_default_opts(&vo);
-    vo.k = 4;
-    vo.iterations = 1;
-    vo.pair.range = 0.85;
-    vo.pair.range_extent = vo.pair.cross_extent = 0.3;
-    vo.pair.box = (sasnav_pose){0.01, 0.01, 0.02};
+    circle_opts(&vo, 4);
     sasnav_virtual_navigation vn;
     CHECK_OK(sasnav_navigate_virtual(run, &vo, &vn));
     const double surge_bound = 0.006, sway_bound = 0.001;
@@ -278,29 +295,13 @@ static void test_closed_wrap(void)
  * Noise-free circular SISO run, 12 pings, interleaved groups of 3. */
 static void test_align_heading(void)
 {
-    sasnav_scenario sc;
-    CHECK_OK(sasnav_scenario_preset("circular", &sc));
-    sc.traj.n_pings = 12;
-    sc.traj.surge_rms = sc.traj.sway_rms = 0.0;
-    sc.snr_db = INFINITY;
-    sasnav_run *run = NULL;
-    CHECK_OK(sasnav_simulate(&sc, NULL, NULL, &run));
+    sasnav_run *run = circle_run(12);
     if (!run) return;
-    const double ramp = 0.0005;
-    for (int i = 0; i < run->n_pings; i++) {
-        sasnav_pose d = {0.0, ramp * i, 0.0};
-        run->nav[i].tx = sasnav_pose_compose(run->nav[i].tx, d);
-        run->nav[i].array = sasnav_pose_compose(run->nav[i].array, d);
-    }
+    for (int i = 0; i < run->n_pings; i++) move_ping(run, i, (sasnav_pose){0.0, 0.0005 * i, 0.0});
     sasnav_virtual_opts vo;
-    sasnav_virtual_default_opts(&vo);
-    vo.k = 3;
+    circle_opts(&vo, 3);
     vo.interleave = 2;
-    vo.iterations = 1;
     vo.align_heading = 1;
-    vo.pair.range = 0.85;
-    vo.pair.range_extent = vo.pair.cross_extent = 0.3;
-    vo.pair.box = (sasnav_pose){0.01, 0.01, 0.02};
     sasnav_virtual_navigation vn;
     CHECK_OK(sasnav_navigate_virtual(run, &vo, &vn));
     CHECK(vn.n_pairs == 7, "12 pings, groups of 3 every other ping: %d pairs", vn.n_pairs);
