@@ -371,6 +371,7 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
         json_object_set_new(root, "stride", json_integer(vn.stride));
         json_object_set_new(root, "interleave", json_integer(vn.interleave));
         json_object_set_new(root, "closed", json_boolean(vn.closed));
+        json_object_set_new(root, "align_heading", json_boolean(vn.align_heading));
         if (vn.closed) json_object_set_new(root, "misclosure", pose_json(vn.misclosure));
         json_object_set_new(root, "length_scale", json_real(vn.length_scale));
         json_object_set_new(root, "iterations", json_integer(vn.iterations));

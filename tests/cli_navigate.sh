@@ -119,6 +119,7 @@ d = json.load(open(sys.argv[1]))
 assert d["virtual_array"] == 4 and d["stride"] == 4 and d["interleave"] == 1, d
 assert len(d["pairs"]) == 3, d["pairs"]
 assert d["length_scale"] == 1.0, d["length_scale"]
+assert d["align_heading"] is False, d["align_heading"]
 for p in d["pairs"]:
     assert p["status"] in ("ok", "ambiguous", "failed", "no_overlap"), p
     assert abs(p["displacement"]["sway"] - p["truth"]["sway"]) < 0.001, p
@@ -146,6 +147,8 @@ fi
 [ $? -eq 2 ] || fail "--closed without --virtual-array: not a usage error"
 "$CLI" navigate "$T/run.h5" --keep-length -o "$T/x.h5" > /dev/null 2>&1
 [ $? -eq 2 ] || fail "--keep-length without --virtual-array: not a usage error"
+"$CLI" navigate "$T/run.h5" --align-heading -o "$T/x.h5" > /dev/null 2>&1
+[ $? -eq 2 ] || fail "--align-heading without --virtual-array: not a usage error"
 
 # Usage errors.
 "$CLI" navigate "$T/run.h5" --method kalman -o "$T/x.h5" > /dev/null 2>&1 && fail "unknown method accepted"

@@ -145,6 +145,7 @@ typedef struct {
     int n_groups;             /* virtual pings */
     int n_pairs;              /* n_groups - 1 (n_groups when closed) */
     int closed;
+    int align_heading;        /* the layouts were turned onto the headings */
     sasnav_pose misclosure;   /* closed: where the chained steps ended
                                  minus where they started (world frame,
                                  before it was spread) */

@@ -393,6 +393,7 @@ int sasnav_navigate_virtual(const sasnav_run *run, const sasnav_virtual_opts *op
     out->n_groups = ng;
     out->n_pairs = c.n_pairs;
     out->closed = c.closed;
+    out->align_heading = opts->align_heading != 0;
     out->pairs = calloc((size_t)ng, sizeof *out->pairs);
     out->centroid_in = calloc((size_t)ng, sizeof *out->centroid_in);
     out->centroid = calloc((size_t)ng, sizeof *out->centroid);
