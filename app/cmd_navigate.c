@@ -586,9 +586,9 @@ int cmd_navigate(int argc, char **argv)
     if (vk) {
         if (n_general)
             return cli_usage("navigate", "--virtual-array takes only --interleave, --stride, "
-                                         "--iterations, --closed, --keep-length, --align-heading, --estimate-yaw, "
-                                         "--k, --i, "
-                                         "--cross-extent, --range-extent, --threads and --json");
+                                         "--iterations, --closed, --keep-length, --align-heading, "
+                                         "--estimate-yaw, --k, --i, --cross-extent, --range-extent, "
+                                         "--threads and --json");
         if (cli_mpi_size() > 1)
             return cli_usage("navigate", "--virtual-array runs in one process (use --threads)");
         sasnav_virtual_opts vo;

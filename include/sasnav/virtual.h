@@ -120,7 +120,8 @@ typedef struct {
                                A position drift of the input tilts the
                                layouts of neighbouring groups alike, and
                                the steps between two such groups keep the
-                               tilt (docs/airsas.md, "Removing a drift");
+                               tilt (docs/airsas.md, section 3, "Cause 1
+                               taken apart");
                                with this the sway part of the drift is
                                measured. Wrong where the vehicle crabs
                                (default 0) */

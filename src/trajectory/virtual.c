@@ -196,8 +196,8 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
     if (!scratch) return sasnav_set_error(SASNAV_ERR_NOMEM, "virtual arrays: out of memory");
     sasnav_ping_pose *gather = scratch + c->nv;
     for (int g = 0; g < ng && !rc; g++)
-        rc = group_layout(c, nav, g * c->stride, c->o->align_heading, gather, c->layout_in + (size_t)g * c->nv,
-                          &out->centroid_in[g]);
+        rc = group_layout(c, nav, g * c->stride, c->o->align_heading, gather,
+                          c->layout_in + (size_t)g * c->nv, &out->centroid_in[g]);
     for (int g = 0; g < c->n_pairs && !rc; g++) {
         sasnav_virtual_pair *vp = &out->pairs[g];
         int h = (g + 1) % ng;
