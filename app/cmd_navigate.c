@@ -133,7 +133,10 @@ static const char *help =
     "  --align-heading   turn each group's layout so that its pings lie along\n"
     "                    their headings (a gyro's; no crab): a smooth drift of\n"
     "                    the input's positions tilts the layouts, and the\n"
-    "                    steps keep the tilt's sway without it (docs/airsas.md)\n"
+    "                    steps keep the tilt's sway without it (docs/airsas.md);\n"
+    "                    the turns are reported, with a warning when their\n"
+    "                    mean would move the track's end by over 1 mm (what a\n"
+    "                    crab or a heading bias would do to every step)\n"
     "  --estimate-yaw    estimate each step's yaw too (default: held at the\n"
     "                    input navigation's: an omnidirectional group shows\n"
     "                    its yaw only through its length)\n"
@@ -364,6 +367,14 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
                     vp->first_p, vp->first_q, sasnav_verdict_name(vp->est.verdict), vp->est.eta);
         }
     }
+    /* align_heading ties the steps to the headings: a constant turn of the
+     * layouts is what a crab or a heading bias would also give. */
+    if (vn.align_heading && vn.turn_exposure > 1e-3)
+        fprintf(stderr,
+                "sasnav navigate: warning: --align-heading turned the layouts by %+.2f mrad on "
+                "average; if that is a crab or a heading bias rather than a drift of the input, "
+                "every step is turned by it (up to %.1f mm at the end of the track)\n",
+                1e3 * vn.turn_mean, 1e3 * vn.turn_exposure);
     if (json) {
         json_t *root = json_object(), *pairs = json_array();
         json_object_set_new(root, "input", json_string(input));
@@ -372,6 +383,14 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
         json_object_set_new(root, "interleave", json_integer(vn.interleave));
         json_object_set_new(root, "closed", json_boolean(vn.closed));
         json_object_set_new(root, "align_heading", json_boolean(vn.align_heading));
+        if (vn.align_heading) {
+            json_t *turns = json_array();
+            for (int g = 0; g < vn.n_groups; g++) json_array_append_new(turns, json_real(vn.layout_turn[g]));
+            json_object_set_new(root, "layout_turn", turns);
+            json_object_set_new(root, "layout_turn_mean", json_real(vn.turn_mean));
+            json_object_set_new(root, "layout_turn_rms", json_real(vn.turn_rms));
+            json_object_set_new(root, "turn_exposure", json_real(vn.turn_exposure));
+        }
         if (vn.closed) json_object_set_new(root, "misclosure", pose_json(vn.misclosure));
         json_object_set_new(root, "length_scale", json_real(vn.length_scale));
         json_object_set_new(root, "iterations", json_integer(vn.iterations));
@@ -417,6 +436,10 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
                    1e3 * vn.misclosure.x, 1e3 * vn.misclosure.y, 1e3 * vn.misclosure.theta, vn.n_pairs);
         if (vn.length_scale != 1.0)
             printf("steps scaled by %.5f to the input navigation's length\n", vn.length_scale);
+        if (vn.align_heading)
+            printf("layouts turned onto the headings by %+.3f mrad mean, %.3f mrad rms (a constant "
+                   "turn of the mean: %.3f mm at the end of the track)\n",
+                   1e3 * vn.turn_mean, 1e3 * vn.turn_rms, 1e3 * vn.turn_exposure);
         printf("%d pairs in %.2f s (%.2f s per pair), %d flagged\n", vn.n_pairs, vn.seconds,
                vn.n_pairs > 0 ? vn.seconds / (vn.n_pairs * vn.iterations) : 0.0, n_flagged);
     }

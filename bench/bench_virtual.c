@@ -477,6 +477,9 @@ int main(int argc, char **argv)
                1e3 * ic, 1e3 * iw, 1e3 * ea, 1e3 * ec, 1e3 * ew, vn.seconds / np / vn.iterations);
         printf("#   flagged steps (input navigation's step kept): %d; length scale %.5f\n", vn.n_fallback,
                vn.length_scale);
+        if (vn.align_heading)
+            printf("#   layouts turned onto the headings: mean %+.3f mrad, rms %.3f mrad, exposure %.3f mm\n",
+                   1e3 * vn.turn_mean, 1e3 * vn.turn_rms, 1e3 * vn.turn_exposure);
         {
             /* How much of the input's step error each estimate keeps: the
              * used steps' estimate error regressed on the input's error

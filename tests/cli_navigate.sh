@@ -109,9 +109,10 @@ trajectory: {n_pings: 16}
 noise: {snr_db: inf}
 EOF
 if "$CLI" simulate --config "$T/circ.yaml" -o "$T/circ.h5" 2> "$T/circ.err"; then
-    if "$CLI" navigate "$T/circ.h5" --virtual-array 4 --iterations 1 --json -o "$T/vnav.h5" \
-        > "$T/vnav.json" 2> "$T/vnav.err"; then
+    if "$CLI" navigate "$T/circ.h5" --virtual-array 4 --iterations 1 --align-heading --json \
+        -o "$T/vnav.h5" > "$T/vnav.json" 2> "$T/vnav.err"; then
         [ -s "$T/vnav.h5" ] || fail "virtual array: no navigation file"
+        grep -q "align-heading" "$T/vnav.err" && fail "virtual array: a crab warning on the nominal circle"
         if [ -x /usr/bin/python3 ]; then
             /usr/bin/python3 - "$T/vnav.json" <<'EOF' || fail "virtual array: JSON content"
 import json, sys
@@ -119,7 +120,12 @@ d = json.load(open(sys.argv[1]))
 assert d["virtual_array"] == 4 and d["stride"] == 4 and d["interleave"] == 1, d
 assert len(d["pairs"]) == 3, d["pairs"]
 assert d["length_scale"] == 1.0, d["length_scale"]
-assert d["align_heading"] is False, d["align_heading"]
+# The input is the nominal circle: its layouts already lie along the
+# headings (a 4-ping chord is parallel to its mean heading), so the turns
+# are 0 to rounding and no crab warning is printed.
+assert d["align_heading"] is True, d["align_heading"]
+assert len(d["layout_turn"]) == 4 and all(abs(t) < 1e-9 for t in d["layout_turn"]), d["layout_turn"]
+assert abs(d["layout_turn_mean"]) < 1e-9 and d["turn_exposure"] < 1e-9, d
 for p in d["pairs"]:
     assert p["status"] in ("ok", "ambiguous", "failed", "no_overlap"), p
     assert abs(p["displacement"]["sway"] - p["truth"]["sway"]) < 0.001, p

@@ -314,7 +314,78 @@ static void test_align_heading(void)
         CHECK(fabs(ew) < 0.25 * fabs(iw), "pair %d: sway error %g mm (input %g mm)", j, 1e3 * ew, 1e3 * iw);
         CHECK(vp->est.verdict == SASNAV_VERDICT_OK, "pair %d: %s", j, sasnav_verdict_name(vp->est.verdict));
     }
+    /* Every layout was tilted by atan(0.5 / 14.8) = 0.0338 rad (sway
+     * growing along track: counter-clockwise) and turned back by as much;
+     * 1 mrad: the arc's chord of a 3-ping group lies along its mean
+     * heading to 1e-6 rad, the rest is the ping's 14.8 mm taken for the
+     * arc. The exposure is the mean turn times the chained length. */
+    double tilt = atan(0.0005 / (0.85 * M_PI / 180.0)), length = 0;
+    for (int g = 0; g < vn.n_groups; g++)
+        CHECK(fabs(vn.layout_turn[g] + tilt) < 1e-3, "group %d turned by %g rad (tilt %g)", g,
+              vn.layout_turn[g], tilt);
+    for (int j = 0; j < vn.n_pairs; j++) length += hypot(vn.pairs[j].step.x, vn.pairs[j].step.y);
+    CHECK(fabs(vn.turn_mean + tilt) < 1e-3 && fabs(vn.turn_rms - tilt) < 1e-3 &&
+              fabs(vn.turn_exposure - fabs(vn.turn_mean) * length) < 1e-12,
+          "turn mean %g, rms %g, exposure %g m (tilt %g, length %g m)", vn.turn_mean, vn.turn_rms,
+          vn.turn_exposure, tilt, length);
     sasnav_virtual_navigation_free(&vn);
+    sasnav_run_free(run);
+}
+
+/* What align_heading cannot tell from a drift: the input's positions are
+ * exact but its headings 0.05 rad counter-clockwise of the track (a crab,
+ * or a heading bias). In the input's frames the track runs 0.05 rad
+ * clockwise of the heading (the nominal steps' sway is -0.74 mm). The
+ * option turns every layout by +0.05 rad onto the headings, so each step
+ * comes out along the heading instead of the track: its sway is off the
+ * input's (right) step by +0.05 x 14.8 mm = +0.74 mm (measured +0.75 to
+ * +0.76), with the verdict "ok" (the pair cannot see it). What the caller sees is
+ * turn_mean = +0.05 rad (1 mrad: the chord as above) and an exposure of
+ * 0.05 x the track's length, which `sasnav navigate` turns into a
+ * warning. The same input without the option: the layouts are exact and
+ * each step's sway within 0.1 mm of the input's (measured -0.004 to -0.054
+ * mm).
+ * Noise-free circle, 8 pings, groups of 3 every other ping (3 pairs). */
+static void test_align_crab(void)
+{
+    const double crab = 0.05;
+    sasnav_run *run = circle_run(8);
+    if (!run) return;
+    for (int i = 0; i < run->n_pings; i++) move_ping(run, i, (sasnav_pose){0.0, 0.0, crab});
+    sasnav_virtual_opts vo;
+    circle_opts(&vo, 3);
+    vo.interleave = 2;
+    for (int align = 0; align < 2; align++) {
+        vo.align_heading = align;
+        sasnav_virtual_navigation vn;
+        CHECK_OK(sasnav_navigate_virtual(run, &vo, &vn));
+        double length = 0;
+        for (int j = 0; j < vn.n_pairs; j++) {
+            const sasnav_virtual_pair *vp = &vn.pairs[j];
+            double d = vp->est.displacement.y - vp->nominal.y;
+            double rotated = crab * hypot(vp->nominal.x, vp->nominal.y);
+            length += hypot(vp->step.x, vp->step.y);
+            printf("  heading %+.2f rad off, %s: pair %d step sway %+.3f mm from the input's "
+                   "(a step along the heading: %+.3f mm), %s\n",
+                   crab, align ? "aligned" : "input layouts", j, 1e3 * d, 1e3 * rotated,
+                   sasnav_verdict_name(vp->est.verdict));
+            if (align)
+                CHECK(fabs(d - rotated) < 0.25 * fabs(rotated), "aligned pair %d: %g mm (expected %g)",
+                      j, 1e3 * d, 1e3 * rotated);
+            else
+                CHECK(fabs(d) < 1e-4, "input layouts, pair %d: %g mm from the input's step", j, 1e3 * d);
+        }
+        if (align)
+            CHECK(fabs(vn.turn_mean - crab) < 1e-3 &&
+                      fabs(vn.turn_exposure - crab * length) < 1e-3 * length,
+                  "crab: turn mean %g rad, exposure %g m (length %g m)", vn.turn_mean,
+                  vn.turn_exposure, length);
+        else
+            CHECK(vn.turn_mean == 0 && vn.turn_rms == 0 && vn.turn_exposure == 0,
+                  "without the option nothing turned: %g %g %g", vn.turn_mean, vn.turn_rms,
+                  vn.turn_exposure);
+        sasnav_virtual_navigation_free(&vn);
+    }
     sasnav_run_free(run);
 }
 
@@ -326,5 +397,6 @@ int main(void)
     test_estimate();
     test_closed_wrap();
     test_align_heading();
+    test_align_crab();
     return test_summary("test_virtual");
 }

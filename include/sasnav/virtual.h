@@ -154,6 +154,21 @@ typedef struct {
     sasnav_pose *centroid_in; /* n_groups: centroids from the input navigation */
     sasnav_pose *centroid;    /* n_groups: estimated (the first one anchored
                                  at its input value) */
+    double *layout_turn;      /* n_groups: the angle (rad, counter-clockwise)
+                                 by which align_heading turned each group's
+                                 layout in the last pass (0 without it) */
+    double turn_mean, turn_rms; /* their mean and rms over the groups */
+    double turn_exposure;     /* |turn_mean| times the chained track's length
+                                 (m): the end-point error that a constant
+                                 crab or heading bias of that size would
+                                 leave, since align_heading turns every step
+                                 by it (0 without align_heading). A smooth
+                                 position drift that returns turns the
+                                 layouts both ways (mean near 0); a large
+                                 exposure means a constant turn: a crab, a
+                                 heading bias or a drift that grows steadily
+                                 along the run, which the echoes cannot tell
+                                 apart (docs/airsas.md, section 3) */
     sasnav_ping_pose *nav;    /* n_pings: the estimated navigation */
     int n_fallback;           /* steps of the last pass that kept the input
                                  navigation's (flagged estimates) */

@@ -44,8 +44,9 @@ int sasnav_virtual_array(const sasnav_array *array, int k, sasnav_array *out)
 /* sasnav_virtual_layout with the run's channel offsets (NULL: none). */
 static int layout_with_offsets(const sasnav_array *array, const sasnav_ping_pose *offset,
                                const sasnav_ping_pose *poses, int k, int align,
-                               sasnav_ping_pose *local, sasnav_pose *centroid)
+                               sasnav_ping_pose *local, sasnav_pose *centroid, double *turn)
 {
+    if (turn) *turn = 0.0;
     if (!array || !poses || !local || !centroid)
         return sasnav_set_error(SASNAV_ERR_ARG, "virtual layout: NULL argument");
     sasnav_array v;
@@ -85,6 +86,7 @@ static int layout_with_offsets(const sasnav_array *array, const sasnav_ping_pose
         }
         double phi = 0.5 * atan2(2.0 * sxy, sxx - syy);
         double cs = cos(phi), sn = sin(phi);
+        if (turn) *turn = -phi;
         for (int i = 0; i < v.n_rx; i++) {
             sasnav_pose *q[2] = {&local[i].tx, &local[i].array};
             for (int t = 0; t < 2; t++) {
@@ -101,7 +103,7 @@ static int layout_with_offsets(const sasnav_array *array, const sasnav_ping_pose
 int sasnav_virtual_layout(const sasnav_array *array, const sasnav_ping_pose *poses, int k,
                           sasnav_ping_pose *local, sasnav_pose *centroid)
 {
-    return layout_with_offsets(array, NULL, poses, k, 0, local, centroid);
+    return layout_with_offsets(array, NULL, poses, k, 0, local, centroid, NULL);
 }
 
 void sasnav_virtual_default_opts(sasnav_virtual_opts *opts)
@@ -131,6 +133,7 @@ void sasnav_virtual_navigation_free(sasnav_virtual_navigation *nav)
     free(nav->pairs);
     free(nav->centroid_in);
     free(nav->centroid);
+    free(nav->layout_turn);
     free(nav->nav);
     memset(nav, 0, sizeof *nav);
 }
@@ -177,11 +180,12 @@ static int estimate_pair(const vctx *c, sasnav_pair *est, sasnav_cfloat *dp, sas
 /* Layout and centroid of the group of pings first + m j, j < k, with
  * poses from `nav`; gather: k scratch poses. */
 static int group_layout(const vctx *c, const sasnav_ping_pose *nav, int first, int align,
-                        sasnav_ping_pose *gather, sasnav_ping_pose *local, sasnav_pose *centroid)
+                        sasnav_ping_pose *gather, sasnav_ping_pose *local, sasnav_pose *centroid,
+                        double *turn)
 {
     for (int j = 0; j < c->k; j++) gather[j] = nav[(first + c->m * j) % c->run->n_pings];
     return layout_with_offsets(&c->run->array, c->run->channel_offset, gather, c->k, align, local,
-                               centroid);
+                               centroid, turn);
 }
 
 /* One pass over the pairs with `nav` as the input navigation: layouts,
@@ -197,7 +201,7 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
     sasnav_ping_pose *gather = scratch + c->nv;
     for (int g = 0; g < ng && !rc; g++)
         rc = group_layout(c, nav, g * c->stride, c->o->align_heading, gather,
-                          c->layout_in + (size_t)g * c->nv, &out->centroid_in[g]);
+                          c->layout_in + (size_t)g * c->nv, &out->centroid_in[g], &out->layout_turn[g]);
     for (int g = 0; g < c->n_pairs && !rc; g++) {
         sasnav_virtual_pair *vp = &out->pairs[g];
         int h = (g + 1) % ng;
@@ -208,8 +212,8 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
         vp->truth = (sasnav_pose){NAN, NAN, NAN};
         if (run->truth) {
             sasnav_pose cp, cq;
-            rc = group_layout(c, run->truth, vp->first_p, 0, gather, scratch, &cp);
-            if (!rc) rc = group_layout(c, run->truth, vp->first_q, 0, gather, scratch, &cq);
+            rc = group_layout(c, run->truth, vp->first_p, 0, gather, scratch, &cp, NULL);
+            if (!rc) rc = group_layout(c, run->truth, vp->first_q, 0, gather, scratch, &cq, NULL);
             if (!rc) vp->truth = sasnav_pose_between(cp, cq);
         }
     }
@@ -271,6 +275,19 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
         if (!vp->used) continue;
         vp->step.x *= out->length_scale;
         vp->step.y *= out->length_scale;
+    }
+    /* align_heading: how far the layouts were turned; their mean is what a
+     * crab or a heading bias would contribute (the steps turned alike). */
+    out->turn_mean = out->turn_rms = out->turn_exposure = 0.0;
+    if (opts->align_heading) {
+        double length = 0;
+        for (int g = 0; g < ng; g++) {
+            out->turn_mean += out->layout_turn[g] / ng;
+            out->turn_rms += out->layout_turn[g] * out->layout_turn[g] / ng;
+        }
+        out->turn_rms = sqrt(out->turn_rms);
+        for (int g = 0; g < c->n_pairs; g++) length += hypot(out->pairs[g].step.x, out->pairs[g].step.y);
+        out->turn_exposure = fabs(out->turn_mean) * length;
     }
     out->centroid[0] = out->centroid_in[0];
     for (int g = 0; g + 1 < ng; g++)
@@ -397,10 +414,12 @@ int sasnav_navigate_virtual(const sasnav_run *run, const sasnav_virtual_opts *op
     out->pairs = calloc((size_t)ng, sizeof *out->pairs);
     out->centroid_in = calloc((size_t)ng, sizeof *out->centroid_in);
     out->centroid = calloc((size_t)ng, sizeof *out->centroid);
+    out->layout_turn = calloc((size_t)ng, sizeof *out->layout_turn);
     out->nav = calloc((size_t)run->n_pings, sizeof *out->nav);
     sasnav_ping_pose *cur = malloc(sizeof *cur * (size_t)run->n_pings);
     c.layout_in = malloc(sizeof *c.layout_in * (size_t)ng * (size_t)c.nv);
-    if (!out->pairs || !out->centroid_in || !out->centroid || !out->nav || !c.layout_in || !cur) {
+    if (!out->pairs || !out->centroid_in || !out->centroid || !out->layout_turn || !out->nav ||
+        !c.layout_in || !cur) {
         free(c.layout_in);
         free(cur);
         sasnav_virtual_navigation_free(out);

@@ -335,7 +335,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --align-heading   turn each group's layout so that its pings lie along
                       their headings (a gyro's; no crab): a smooth drift of
                       the input's positions tilts the layouts, and the
-                      steps keep the tilt's sway without it (docs/airsas.md)
+                      steps keep the tilt's sway without it (docs/airsas.md);
+                      the turns are reported, with a warning when their
+                      mean would move the track's end by over 1 mm (what a
+                      crab or a heading bias would do to every step)
     --estimate-yaw    estimate each step's yaw too (default: held at the
                       input navigation's: an omnidirectional group shows
                       its yaw only through its length)
