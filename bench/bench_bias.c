@@ -15,7 +15,13 @@
  *
  * usage: bench_bias [--seeds S0 N] [--snr DB|inf] [--models fixed,lags,yaw,full]
  *                   [--range-extent M] [--cross-extent M] [--error-extent M]
- *                   [--k K] [--i I] [--threads T] [--quiet]
+ *                   [--k K] [--i I] [--scene-range Y0,Y1] [--threads T] [--quiet]
+ *
+ * --scene-range puts the ripple seabed between ranges Y0 and Y1 (the
+ * preset's 9-11 m by default) and widens the recorded swath to hold it:
+ * with the grid's --range-extent it measures how the criterion's yaw
+ * error depends on the range span of seabed the grid sees
+ * (docs/estimator.md, "The yaw floor is the seabed's range span").
  *
  * Seeds follow `sasnav simulate --seed S` (scene 3S+1, trajectory 3S+2,
  * noise 3S+3). Pairs run in parallel (one estimator per thread, one
@@ -105,7 +111,7 @@ static void usage(void)
 {
     fprintf(stderr, "usage: bench_bias [--seeds S0 N] [--snr DB|inf] [--models fixed,lags,yaw,full]\n"
                     "                  [--range-extent M] [--cross-extent M] [--error-extent M]\n"
-                    "                  [--k K] [--i I] [--threads T] [--quiet]\n");
+                    "                  [--k K] [--i I] [--scene-range Y0,Y1] [--threads T] [--quiet]\n");
 }
 
 int main(int argc, char **argv)
@@ -113,6 +119,7 @@ int main(int argc, char **argv)
     long s0 = 101, ns = 3;
     double snr = 30.0;
     int use[N_MODELS] = {1, 1, 1, 1}, threads = 0, quiet = 0;
+    double scene_y0 = NAN, scene_y1 = NAN;
     sasnav_pair_opts po;
     sasnav_pair_default_opts(&po);
     for (int a = 1; a < argc; a++) {
@@ -127,7 +134,13 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[a], "--error-extent") && a + 1 < argc) po.error_extent = atof(argv[++a]);
         else if (!strcmp(argv[a], "--k") && a + 1 < argc) po.k = atoi(argv[++a]);
         else if (!strcmp(argv[a], "--i") && a + 1 < argc) po.i = atoi(argv[++a]);
-        else if (!strcmp(argv[a], "--threads") && a + 1 < argc) threads = atoi(argv[++a]);
+        else if (!strcmp(argv[a], "--scene-range") && a + 1 < argc) {
+            if (sscanf(argv[++a], "%lf,%lf", &scene_y0, &scene_y1) != 2 || !(scene_y1 > scene_y0) ||
+                !(scene_y0 > 1.0)) {
+                usage();
+                return 2;
+            }
+        } else if (!strcmp(argv[a], "--threads") && a + 1 < argc) threads = atoi(argv[++a]);
         else if (!strcmp(argv[a], "--quiet")) quiet = 1;
         else {
             usage();
@@ -154,8 +167,9 @@ int main(int argc, char **argv)
     printf("paper-trajectory, SNR %g dB, seeds %ld..%ld, k = %d, i = %d, range extent %g m, "
            "cross extent %g m (0 = auto), error extent %g m (0 = the grid)\n",
            snr, s0, s0 + ns - 1, po.k, po.i, po.range_extent, po.cross_extent, po.error_extent);
+    if (isfinite(scene_y0)) printf("seabed between %g and %g m\n", scene_y0, scene_y1);
     for (long s = s0; s < s0 + ns; s++) {
-        sasnav_run *run = bench_trajectory_run(s, snr, 0);
+        sasnav_run *run = bench_trajectory_run_scene(s, snr, 0, scene_y0, scene_y1);
         if (!run) return 1;
         int np = run->n_pings - 1;
         pairs_per_run = np;

@@ -31,10 +31,20 @@ static inline double percentile(double *v, int n, double pc)
 /* The paper-trajectory run of seed s, as `sasnav simulate --preset
  * paper-trajectory --seed S [--aiding]`: scene 3S+1, trajectory 3S+2,
  * noise 3S+3, aiding 3S+4. NULL (message printed) on failure. */
-static inline sasnav_run *bench_trajectory_run(long s, double snr, int aiding)
+/* The same with the seabed between ranges y0 and y1 (m; the preset's
+ * 9-11 m where y0 is not finite) and the recorded swath widened to hold
+ * it with the preset's margins (0.2 m before, 0.6 m after). */
+static inline sasnav_run *bench_trajectory_run_scene(long s, double snr, int aiding, double y0,
+                                                     double y1)
 {
     sasnav_scenario sc;
     sasnav_scenario_preset("paper-trajectory", &sc);
+    if (isfinite(y0) && isfinite(y1)) {
+        sc.ripples.y_min = y0;
+        sc.ripples.y_max = y1;
+        if (y0 - 0.2 < sc.range_min) sc.range_min = y0 - 0.2;
+        if (y1 + 0.6 > sc.range_max) sc.range_max = y1 + 0.6;
+    }
     sc.snr_db = snr;
     sc.ripples.seed = (uint64_t)s * 3 + 1;
     sc.traj.seed = (uint64_t)s * 3 + 2;
@@ -49,6 +59,11 @@ static inline sasnav_run *bench_trajectory_run(long s, double snr, int aiding)
         return NULL;
     }
     return run;
+}
+
+static inline sasnav_run *bench_trajectory_run(long s, double snr, int aiding)
+{
+    return bench_trajectory_run_scene(s, snr, aiding, NAN, NAN);
 }
 
 /* Consumes `--seeds S0 N` or `--snr DB|inf` at argv[*a] (advancing *a);
