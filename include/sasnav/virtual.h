@@ -162,13 +162,15 @@ typedef struct {
                                  (m): the end-point error that a constant
                                  crab or heading bias of that size would
                                  leave, since align_heading turns every step
-                                 by it (0 without align_heading). A smooth
-                                 position drift that returns turns the
-                                 layouts both ways (mean near 0); a large
-                                 exposure means a constant turn: a crab, a
-                                 heading bias or a drift that grows steadily
-                                 along the run, which the echoes cannot tell
-                                 apart (docs/airsas.md, section 3) */
+                                 by it (0 without align_heading). A sideways
+                                 drift that returns turns the layouts both
+                                 ways (mean 0); a large exposure means a
+                                 constant turn: a crab, a heading bias, a
+                                 sideways drift that grows along the run,
+                                 or on a curved track an along-track
+                                 offset (a turn of offset / radius), which
+                                 the echoes cannot tell apart
+                                 (docs/airsas.md, section 3) */
     sasnav_ping_pose *nav;    /* n_pings: the estimated navigation */
     int n_fallback;           /* steps of the last pass that kept the input
                                  navigation's (flagged estimates) */
