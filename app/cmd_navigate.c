@@ -445,19 +445,23 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
     }
     /* Every step may say "ok" while the chain drifts: say so (measured,
      * docs/navigation.md "Virtual arrays"). */
+    /* What of the input's drift the steps keep: with aligned layouts its
+     * along-track part (the layouts' spacing), otherwise all of it. */
+    const char *kept = vn.align_heading ? "along track: the layouts' spacing is the input's"
+                                        : "their layouts are the input's";
     if (vn.length_scale != 1.0)
         fprintf(stderr,
                 "sasnav navigate: warning: the steps were scaled by %.5f to the input navigation's "
-                "length; virtual-array steps keep a smooth drift of the input (their layouts are the "
-                "input's) and their errors add up along the run: the navigation can end worse than "
-                "its input (docs/airsas.md)\n",
-                vn.length_scale);
+                "length; virtual-array steps keep a smooth drift of the input (%s) and their errors "
+                "add up along the run: the navigation can end worse than its input (docs/airsas.md)\n",
+                vn.length_scale, kept);
     else
         fprintf(stderr,
-                "sasnav navigate: warning: virtual-array steps keep a smooth drift of the input (their "
-                "layouts are the input's) and are biased in length (0.5-3 %% too long on the simulated "
-                "and real AirSAS; --keep-length takes the length from the input); chained over a long "
-                "run the navigation can end worse than its input (docs/airsas.md)\n");
+                "sasnav navigate: warning: virtual-array steps keep a smooth drift of the input (%s) "
+                "and are biased in length (0.5-3 %% too long on the simulated and real AirSAS; "
+                "--keep-length takes the length from the input); chained over a long run the "
+                "navigation can end worse than its input (docs/airsas.md)\n",
+                kept);
     fprintf(stderr, "sasnav navigate: %d pings -> %s\n", vn.n_pings, output);
     sasnav_virtual_navigation_free(&vn);
     sasnav_run_free(run);
