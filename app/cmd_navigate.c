@@ -444,9 +444,9 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
                vn.n_pairs > 0 ? vn.seconds / (vn.n_pairs * vn.iterations) : 0.0, n_flagged);
     }
     /* Every step may say "ok" while the chain drifts: say so (measured,
-     * docs/navigation.md "Virtual arrays"). */
-    /* What of the input's drift the steps keep: with aligned layouts its
-     * along-track part (the layouts' spacing), otherwise all of it. */
+     * docs/navigation.md "Virtual arrays"), and what of the input's drift
+     * the steps keep: with aligned layouts its along-track part (the
+     * layouts' spacing), otherwise all of it. */
     const char *kept = vn.align_heading ? "along track: the layouts' spacing is the input's"
                                         : "their layouts are the input's";
     if (vn.length_scale != 1.0)
