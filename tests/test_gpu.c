@@ -13,7 +13,9 @@
  *    each level agrees with the CPU's (zeta and eta within 1e-5 relative:
  *    float arithmetic in another order, measured 1e-7 on an H200) and its
  *    T, T^H within 1e-5 of the CPU operator's. Without a device this part
- *    says so and is not run (the CI machines have none). */
+ *    says so and is not run (the CI machines have none).
+ * 4. Where a device is present: an estimator's kept device contexts give a
+ *    second pair the bits a fresh estimator gives it. */
 #include "sasnav/error.h"
 #include "sasnav/estimator.h"
 #include "sasnav/geometry.h"
@@ -238,12 +240,69 @@ static void test_evaluations(void)
 }
 #endif
 
+#ifdef SASNAV_HAVE_CUDA
+/* An estimator's device contexts are kept from one pair to the next (and
+ * levels 1 and 2 keep a graph each): after a first pair, the evaluations of
+ * a second pair must be those of a fresh estimator given only that pair, to
+ * the bit (the same kernels on the same data; a stale point set, geometry
+ * or graph would change them by far more), and within 1e-5 of the CPU's. */
+static void test_context_reuse(void)
+{
+    if (gpu_check_device() == SASNAV_ERR_UNSUPPORTED) return;
+    sasnav_scenario sc;
+    CHECK_OK(sasnav_scenario_preset("paper-trajectory", &sc));
+    sc.traj.n_pings = 3;
+    sasnav_run *run = NULL;
+    CHECK_OK(sasnav_simulate(&sc, NULL, NULL, &run));
+    if (!run) return;
+    sasnav_pair_opts po;
+    sasnav_pair_default_opts(&po);
+    po.range = sc.range_of_interest;
+    po.tx_lag = sc.traj.tx_lag;
+    po.nthreads = 1;
+    sasnav_pair *est[3] = {NULL, NULL, NULL}; /* reused, fresh, CPU */
+    CHECK_OK(sasnav_pair_create(&run->sys, &run->array, &run->win, &po, &est[2]));
+    po.gpu = 1;
+    for (int e = 0; e < 2; e++) CHECK_OK(sasnav_pair_create(&run->sys, &run->array, &run->win, &po, &est[e]));
+    if (!est[0] || !est[1] || !est[2]) goto done;
+    sasnav_pose n01 = sasnav_ping_displacement(&run->nav[0], &run->nav[1]);
+    sasnav_pose n12 = sasnav_ping_displacement(&run->nav[1], &run->nav[2]);
+    CHECK_OK(sasnav_pair_set_data(est[0], sasnav_run_ping(run, 0), sasnav_run_ping(run, 1), n01));
+    for (int level = 0; level < 3; level++) {
+        double z, eta;
+        CHECK_OK(sasnav_pair_eval(est[0], (sasnav_pose){1e-3, 0, 0}, level, 0, &z, &eta, NULL));
+    }
+    for (int e = 0; e < 3; e++)
+        CHECK_OK(sasnav_pair_set_data(est[e], sasnav_run_ping(run, 1), sasnav_run_ping(run, 2), n12));
+    /* levels 1 and 2 alternate (they share a context: two graphs) */
+    const int levels[7] = {0, 1, 2, 1, 2, 1, 0};
+    int same = 1;
+    for (int h = 0; h < 7; h++) {
+        sasnav_pose t = {1e-3 * (h - 3), 2e-4 * h, 1e-3 * (h % 3)};
+        double z[3], eta[3];
+        for (int e = 0; e < 3; e++) CHECK_OK(sasnav_pair_eval(est[e], t, levels[h], 0, &z[e], &eta[e], NULL));
+        same &= z[0] == z[1] && eta[0] == eta[1];
+        CHECK(z[0] == z[1] && eta[0] == eta[1],
+              "level %d after another pair: zeta %.9g / %.9g, eta %.9g / %.9g (kept context / fresh)",
+              levels[h], z[0], z[1], eta[0], eta[1]);
+        CHECK(fabs(z[0] / z[2] - 1) < 1e-5 && fabs(eta[0] / eta[2] - 1) < 1e-5,
+              "level %d after another pair: zeta %.8f / %.8f, eta %.8f / %.8f (GPU / CPU)", levels[h], z[0],
+              z[2], eta[0], eta[2]);
+    }
+    if (same) printf("GPU: a second pair on kept contexts gives a fresh estimator's bits\n");
+done:
+    for (int e = 0; e < 3; e++) sasnav_pair_destroy(est[e]);
+    sasnav_run_free(run);
+}
+#endif
+
 int main(void)
 {
     test_view();
     test_option();
 #ifdef SASNAV_HAVE_CUDA
     test_evaluations();
+    test_context_reuse();
 #endif
     return test_summary("test_gpu");
 }

@@ -187,10 +187,9 @@ static int level_make_ops(sasnav_pair *pr, pair_level *lv, double xcentre, pair_
         sasnav_op_destroy(lv->op_p);
         sasnav_op_destroy(lv->op_q);
     }
-#ifdef SASNAV_HAVE_CUDA
-    gpu_destroy(lv->gpu); /* made again for the new operators */
-#endif
-    lv->gpu = NULL;
+    /* The GPU context is kept (gpu_project makes a new one only where the
+     * new operators do not fit it); its points and geometries are set
+     * again. */
     lv->gpu_q_placed = lv->gpu_points = 0;
     lv->op_p = lv->op_q = NULL;
     lv->borrowed = 0;
@@ -702,6 +701,10 @@ static int gpu_project(sasnav_pair *pr, int level, pair_level *lv, sasnav_pose e
     op_view vp, vq;
     int device_geometry = gpu_device_geometry();
     int rc = op_view_get(own->op_p, &vp);
+    if (!rc && own->gpu && !gpu_fits(own->gpu, &vp)) {
+        gpu_destroy(own->gpu);
+        own->gpu = NULL;
+    }
     if (!rc && !own->gpu) {
         rc = gpu_create(&vp, &own->gpu);
         own->gpu_q_placed = own->gpu_points = 0;

@@ -81,6 +81,14 @@ typedef struct {
     int tap_degree;
 } geom_consts;
 
+#define N_GRAPHS 2
+typedef struct {
+    cudaGraphExec_t exec;
+    int have, k, i;
+    double lambda;
+    unsigned long used; /* graph_clock at the last launch */
+} eval_graph;
+
 struct gpu_ctx {
     int np, n_rx, ns, pad, mp, lf, ext, wpad, kmax, n_blocks;
     /* Device-side geometry (gpu_set_points, gpu_place). */
@@ -103,10 +111,12 @@ struct gpu_ctx {
     cudaEvent_t ev, ev_join;
     int have_ev, have_ev_join;
     /* The evaluation as one CUDA graph (captured at the first evaluation
-     * of a (k, i, lambda); replayed after: one launch instead of ~4,700). */
-    cudaGraphExec_t graph;
-    int have_graph, graph_k, graph_i, no_graph;
-    double graph_lambda;
+     * of a (k, i, lambda); replayed after: one launch instead of ~4,700).
+     * Two are kept (levels 1 and 2 share a context and alternate); a third
+     * (k, i, lambda) replaces the one used least recently. */
+    eval_graph graphs[N_GRAPHS];
+    unsigned long graph_clock;
+    int no_graph;
     char name[256];
 };
 
@@ -562,7 +572,8 @@ extern "C" void gpu_destroy(gpu_ctx *g)
     cudaFree(g->spectral);
     cudaFree(g->rho_q);
     cudaFree(g->data_q);
-    if (g->have_graph) cudaGraphExecDestroy(g->graph);
+    for (int j = 0; j < N_GRAPHS; j++)
+        if (g->graphs[j].have) cudaGraphExecDestroy(g->graphs[j].exec);
     if (g->have_ev) cudaEventDestroy(g->ev);
     if (g->have_ev_join) cudaEventDestroy(g->ev_join);
     free(g->h_start);
@@ -702,6 +713,8 @@ static int same_shape(const gpu_ctx *g, const op_view *v)
            v->kmax == g->kmax && v->n_pairs == g->n_pairs;
 }
 
+extern "C" int gpu_fits(const gpu_ctx *g, const op_view *v) { return g && v && same_shape(g, v); }
+
 extern "C" int gpu_set_op(gpu_ctx *g, int which, const op_view *v)
 {
     if (!g || !v || which < 0 || which > 1) return sasnav_set_error(SASNAV_ERR_ARG, "GPU: bad set_op arguments");
@@ -810,9 +823,9 @@ static int enqueue_eval(gpu_ctx *g, int k, int i, double tikhonov)
     return SASNAV_OK;
 }
 
-/* Captures enqueue_eval into g->graph (stream capture of stream 0, which
+/* Captures enqueue_eval into *exec (stream capture of stream 0, which
  * forks stream 1 and joins it back). */
-static int capture(gpu_ctx *g, int k, int i, double tikhonov)
+static int capture(gpu_ctx *g, int k, int i, double tikhonov, cudaGraphExec_t *exec)
 {
     cudaStream_t st = g->ws[0].st;
     CK(cudaStreamBeginCapture(st, cudaStreamCaptureModeThreadLocal));
@@ -825,7 +838,7 @@ static int capture(gpu_ctx *g, int k, int i, double tikhonov)
     }
     if (e != cudaSuccess)
         return sasnav_set_error(SASNAV_ERR_INTERNAL, "GPU: graph capture failed: %s", cudaGetErrorString(e));
-    e = cudaGraphInstantiate(&g->graph, graph, 0);
+    e = cudaGraphInstantiate(exec, graph, 0);
     cudaGraphDestroy(graph);
     if (e != cudaSuccess)
         return sasnav_set_error(SASNAV_ERR_INTERNAL, "GPU: graph instantiation failed: %s",
@@ -845,22 +858,30 @@ extern "C" int gpu_eval(gpu_ctx *g, const float *data_q, const float *rho_p, int
     chain_ws *w0 = &g->ws[0], *w1 = &g->ws[1];
     CK(cudaMemcpyAsync(g->data_q, data_q, g->nd * sizeof(float2), cudaMemcpyHostToDevice, w0->st));
     CK(cudaMemcpyAsync(w0->psi, rho_p, np * sizeof(float2), cudaMemcpyHostToDevice, w0->st));
-    if (!g->no_graph && (!g->have_graph || g->graph_k != k || g->graph_i != i ||
-                         g->graph_lambda != tikhonov)) {
-        if (g->have_graph) cudaGraphExecDestroy(g->graph);
-        g->have_graph = 0;
-        if (capture(g, k, i, tikhonov) == SASNAV_OK) {
-            g->have_graph = 1;
-            g->graph_k = k;
-            g->graph_i = i;
-            g->graph_lambda = tikhonov;
-        } else {
-            g->no_graph = 1; /* not capturable here: the same work, launched one by one */
-            cudaGetLastError();
+    eval_graph *eg = NULL;
+    if (!g->no_graph) {
+        for (int j = 0; j < N_GRAPHS && !eg; j++)
+            if (g->graphs[j].have && g->graphs[j].k == k && g->graphs[j].i == i &&
+                g->graphs[j].lambda == tikhonov)
+                eg = &g->graphs[j];
+        if (!eg) {
+            eg = &g->graphs[0]; /* an empty slot, else the least recently used */
+            for (int j = 1; j < N_GRAPHS && eg->have; j++)
+                if (!g->graphs[j].have || g->graphs[j].used < eg->used) eg = &g->graphs[j];
+            if (eg->have) cudaGraphExecDestroy(eg->exec);
+            eg->have = 0;
+            if (capture(g, k, i, tikhonov, &eg->exec) == SASNAV_OK) {
+                *eg = (eval_graph){eg->exec, 1, k, i, tikhonov, 0};
+            } else {
+                eg = NULL;
+                g->no_graph = 1; /* not capturable here: the same work, launched one by one */
+                cudaGetLastError();
+            }
         }
     }
-    if (g->have_graph) {
-        CK(cudaGraphLaunch(g->graph, w0->st));
+    if (eg) {
+        eg->used = ++g->graph_clock;
+        CK(cudaGraphLaunch(eg->exec, w0->st));
     } else if ((rc = enqueue_eval(g, k, i, tikhonov))) {
         return rc;
     }

@@ -39,6 +39,11 @@ int gpu_check_device(void);
 int gpu_create(const op_view *shape, gpu_ctx **out);
 void gpu_destroy(gpu_ctx *g);
 
+/* Whether g can hold operators shaped like v (the same grids, points and
+ * channels): a context is kept from one pair to the next where it can
+ * (plans, buffers and captured graphs made once). */
+int gpu_fits(const gpu_ctx *g, const op_view *v);
+
 /* Copies op's current geometry to the device as operator `which` (0: p,
  * 1: q), unless the copy already holds it. */
 int gpu_set_op(gpu_ctx *g, int which, const op_view *op);
