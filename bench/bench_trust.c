@@ -17,7 +17,7 @@
  * usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE]
  *                    [--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows]
  *                    [--fused-lags] [--sub-lags] [--methods M1,M2,...]
- *                    [--k K] [--i I]
+ *                    [--k K] [--i I] [--gpu]
  *
  * Seeds follow `sasnav simulate --seed S --aiding` (scene 3S+1, trajectory
  * 3S+2, noise 3S+3, aiding 3S+4). Prints one line per run and method, then
@@ -38,7 +38,10 @@
  * fused+lags only, --sub-lags sub+lags only. --methods runs only the
  * named rows (e.g. `--methods fused+lags,aiding`: the default fusion and
  * dead reckoning, half the time of all rows). --k, --i set the subspace
- * estimator's final-stage iterations (default the estimator's 8, 8). */
+ * estimator's final-stage iterations (default the estimator's 8, 8).
+ * --gpu runs the subspace rows' error evaluations on a CUDA GPU (builds with
+ * -DSASNAV_CUDA=ON; docs/estimator.md, "GPU": the CPU's estimates to float
+ * rounding, not to the bit). */
 #include "sasnav/error.h"
 #include "sasnav/navigate.h"
 #include "sasnav/sim.h"
@@ -62,7 +65,7 @@ int main(int argc, char **argv)
 {
     long s0 = 1001, ns = 10;
     double snr = 30.0;
-    int threads = 0, speed_lags = 0, k_final = 0, i_final = 0;
+    int threads = 0, speed_lags = 0, k_final = 0, i_final = 0, gpu = 0;
     int use[N_METHODS] = {1, 1, 1, 1, 1, 1, 0, 0}; /* the methods run */
     double aiding_bias = 4e-4;
     const char *pairs_path = NULL;
@@ -95,6 +98,8 @@ int main(int argc, char **argv)
                 }
             }
             if (use[M_PAPER] || use[M_FUSED] || use[M_FUSED_BIAS]) use[M_SUB] = 1;
+        } else if (!strcmp(argv[a], "--gpu")) {
+            gpu = 1;
         } else if (!strcmp(argv[a], "--pairs") && a + 1 < argc) {
             pairs_path = argv[++a];
         } else if (!strcmp(argv[a], "--k") && a + 1 < argc) {
@@ -104,7 +109,7 @@ int main(int argc, char **argv)
         } else {
             fprintf(stderr, "usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE] "
                             "[--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows] [--fused-lags] [--sub-lags] "
-                            "[--methods M1,M2,...] [--k K] [--i I]\n");
+                            "[--methods M1,M2,...] [--k K] [--i I] [--gpu]\n");
             return 2;
         }
     }
@@ -124,7 +129,9 @@ int main(int argc, char **argv)
         st[m].rms_sway = calloc((size_t)ns, sizeof(double));
         if (!st[m].final_sway || !st[m].final_surge || !st[m].final_yaw || !st[m].rms_sway) return 1;
     }
-    printf("paper-trajectory with aiding, SNR %g dB, seeds %ld..%ld\n", snr, s0, s0 + ns - 1);
+    setvbuf(stdout, NULL, _IOLBF, 0); /* one line per run as it ends (long studies) */
+    printf("paper-trajectory with aiding, SNR %g dB, seeds %ld..%ld%s\n", snr, s0, s0 + ns - 1,
+           gpu ? ", subspace evaluations on the GPU" : "");
     printf("%6s %-10s %6s %9s %8s %14s %14s %12s %10s\n", "seed", "method", "slips", "unflagged",
            "flagged", "final sway mm", "final surge mm", "final yaw", "s/pair");
     for (long s = s0; s < s0 + ns; s++) {
@@ -147,6 +154,7 @@ int main(int argc, char **argv)
             if (m == M_PAPER || m == M_FUSED || m == M_FUSED_BIAS) o.reuse = &nav[M_SUB];
             if (m == M_DPCA) o.method = SASNAV_METHOD_DPCA;
             if (m == M_AID) o.method = SASNAV_METHOD_AIDING;
+            o.pair.gpu = gpu && o.method == SASNAV_METHOD_SUBSPACE;
             /* The rows that reuse M_SUB's estimates keep its offsets in
              * their re-estimates (0 unless --speed-lags). */
             o.speed_lags = m == M_SUB ? speed_lags : 0;
