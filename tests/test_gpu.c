@@ -191,6 +191,22 @@ static void test_option(void)
 }
 
 #ifdef SASNAV_HAVE_CUDA
+/* A run of the preset (n_pings of it, 0: all; its scenario in sc) and the
+ * estimator options for it (one thread, the CPU). */
+static sasnav_run *simulate_preset(const char *name, int n_pings, sasnav_scenario *sc,
+                                   sasnav_pair_opts *po)
+{
+    sasnav_run *run = NULL;
+    CHECK_OK(sasnav_scenario_preset(name, sc));
+    if (n_pings > 0) sc->traj.n_pings = n_pings;
+    CHECK_OK(sasnav_simulate(sc, NULL, NULL, &run));
+    sasnav_pair_default_opts(po);
+    po->range = sc->range_of_interest;
+    po->tx_lag = sc->traj.tx_lag;
+    po->nthreads = 1;
+    return run;
+}
+
 /* The evaluations of a GPU estimator against a CPU one on the paper pair. */
 static void test_evaluations(void)
 {
@@ -199,15 +215,9 @@ static void test_evaluations(void)
         return;
     }
     sasnav_scenario sc;
-    CHECK_OK(sasnav_scenario_preset("paper-pair", &sc));
-    sasnav_run *run = NULL;
-    CHECK_OK(sasnav_simulate(&sc, NULL, NULL, &run));
-    if (!run) return;
     sasnav_pair_opts po;
-    sasnav_pair_default_opts(&po);
-    po.range = sc.range_of_interest;
-    po.tx_lag = sc.traj.tx_lag;
-    po.nthreads = 1;
+    sasnav_run *run = simulate_preset("paper-pair", 0, &sc, &po);
+    if (!run) return;
     sasnav_pose nominal = sasnav_ping_displacement(&run->nav[0], &run->nav[1]);
     sasnav_pair *cpu = NULL, *gpu = NULL;
     CHECK_OK(sasnav_pair_create(&run->sys, &run->array, &run->win, &po, &cpu));
@@ -250,16 +260,9 @@ static void test_context_reuse(void)
 {
     if (gpu_check_device() == SASNAV_ERR_UNSUPPORTED) return;
     sasnav_scenario sc;
-    CHECK_OK(sasnav_scenario_preset("paper-trajectory", &sc));
-    sc.traj.n_pings = 3;
-    sasnav_run *run = NULL;
-    CHECK_OK(sasnav_simulate(&sc, NULL, NULL, &run));
-    if (!run) return;
     sasnav_pair_opts po;
-    sasnav_pair_default_opts(&po);
-    po.range = sc.range_of_interest;
-    po.tx_lag = sc.traj.tx_lag;
-    po.nthreads = 1;
+    sasnav_run *run = simulate_preset("paper-trajectory", 3, &sc, &po);
+    if (!run) return;
     sasnav_pair *est[3] = {NULL, NULL, NULL}; /* reused, fresh, CPU */
     CHECK_OK(sasnav_pair_create(&run->sys, &run->array, &run->win, &po, &est[2]));
     po.gpu = 1;
