@@ -1,0 +1,53 @@
+#!/bin/sh
+# Same-machine A/B of two CUDA builds of the GPU path (docs/estimator.md,
+# "Kept contexts, and the GPU path checked again after its review"): the
+# device checks of NEW, then alternating runs of both on the same data
+# (bench_navigate_gpu on paper-trajectory seed 3301, sasnav pair on the
+# paper pair), whether their outputs agree (times aside), and a memory
+# check of NEW's device checks.
+#   sh bench/gpu/device-ab.sh OLD NEW OUT
+# OLD, NEW: folders holding sasnav, bench_navigate_gpu and test_gpu of a
+# -DSASNAV_CUDA=ON build each (and, in NEW/lib, the shared libraries the
+# machine lacks); logs go to OUT.
+set -u
+old=$1
+new=$2
+out=$3
+mkdir -p "$out"
+cufft=$(ls /usr/local/cuda/lib64/libcufft.so.12 2>/dev/null ||
+        find /usr /opt -name 'libcufft.so.12' 2>/dev/null | head -n 1)
+LD_LIBRARY_PATH=$new/lib:$(dirname "$cufft")${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+export LD_LIBRARY_PATH OMP_NUM_THREADS=2
+run() { # NAME SECONDS COMMAND...
+    name=$1; secs=$2; shift 2
+    timeout "$secs" "$@" > "$out/$name.txt" 2>&1
+    echo "== $name exit $?"; tail -n 6 "$out/$name.txt"
+}
+run test_gpu 60 "$new/test_gpu"
+"$new/sasnav" simulate --preset paper-trajectory --seed 3301 --snr 30 -o "$out/traj.h5" > /dev/null
+"$new/sasnav" simulate --preset paper-pair -o "$out/pair.h5" > /dev/null
+for r in 1 2; do
+    for v in old new; do
+        eval "b=\$$v"
+        run "nav_${v}_$r" 60 "$b/bench_navigate_gpu" --seeds 3301 1 --threads 2,8 --gpu
+    done
+done
+for r in 1 2 3; do
+    for v in old new; do
+        eval "b=\$$v"
+        run "pair_${v}_$r" 30 "$b/sasnav" pair "$out/pair.h5" --threads 2 --json --gpu
+    done
+done
+for v in old new; do
+    eval "b=\$$v"
+    run "navcli_$v" 60 "$b/sasnav" navigate "$out/traj.h5" --gpu --threads 8 --json -o "$out/nav_$v.h5"
+    grep -v 'seconds\|pairs_per_second\|sasnav navigate:' "$out/navcli_$v.txt" > "$out/navcli_$v.strip"
+    grep -v 'seconds' "$out/pair_${v}_1.txt" > "$out/pair_$v.strip"
+done
+for k in navcli pair; do
+    if cmp -s "$out/${k}_old.strip" "$out/${k}_new.strip"; then echo "$k: old and new agree (times aside)"
+    else echo "$k: old and new DIFFER"; fi
+done
+if command -v compute-sanitizer > /dev/null 2>&1; then
+    run memcheck 240 compute-sanitizer --tool memcheck --leak-check full "$new/test_gpu"
+fi
