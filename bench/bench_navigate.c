@@ -10,7 +10,9 @@
  * thread count: wall time of the pair estimates, pairs per second, seconds
  * per pair, how many pairs ran at a time, the final cumulative sway error
  * (the paper's figure of merit, bound lambda/25) and whether the pair
- * estimates are bit-identical to those of the first thread count. Then the
+ * estimates are bit-identical to those of the first thread count, and where
+ * the pairs' time goes (their estimates' stage seconds summed over the
+ * pairs; "rest": a pair's wall time outside its stages). Then the
  * peak resident memory (ru_maxrss). --gpu: the evaluations on a CUDA GPU
  * (builds with -DSASNAV_CUDA=ON: docs/estimator.md, "GPU"); --gpu-copy: the
  * same with q's pairs computed on the CPU and copied (the slower variant). */
@@ -98,6 +100,17 @@ int main(int argc, char **argv)
                    nav.seconds_estimation, nav.pairs_per_second, nav.seconds_per_pair,
                    nav.threads_over_pairs, 1e3 * sway, t == 0 ? "-" : same ? "yes" : "NO",
                    fabs(sway) > lambda / 25 ? "  (over lambda/25)" : "");
+            double st[5] = {0, 0, 0, 0, 0};
+            for (int j = 0; j < nav.n_pairs; j++) {
+                const sasnav_pair_result *r = &nav.pairs[j].result;
+                st[0] += r->seconds_global;
+                st[1] += r->seconds_zeta;
+                st[2] += r->seconds_eta;
+                st[3] += r->seconds_final;
+                st[4] += r->seconds - r->seconds_global - r->seconds_zeta - r->seconds_eta - r->seconds_final;
+            }
+            printf("       pairs' seconds summed: global %.2f, zeta %.2f, eta %.2f, final %.2f, rest %.2f\n", st[0],
+                   st[1], st[2], st[3], st[4]);
             fflush(stdout);
             if (t == 0) first = nav;
             else sasnav_navigation_free(&nav);

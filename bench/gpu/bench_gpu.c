@@ -1,6 +1,7 @@
 /* The GPU evaluation path against the CPU (builds with -DSASNAV_CUDA=ON).
  *
  *   bench_gpu [--draws N] [--threads T] [--evals M] [--no-estimates]
+ *             [--concurrent N1,N2,...] [--replay N1,N2,...]
  *
  * On paper-pair (30 dB; the paper's case, then N seeded draws of bench_pair's
  * distribution, seed 2026):
@@ -16,6 +17,15 @@
  *     pairs copied (GPc) and with device geometry (GPd, the default):
  *     estimate, error against the truth, evaluations, applications, wall
  *     time per stage; the ratios of the wall times.
+ * --concurrent: instead of 3, Ni GPU estimators on the paper pair (one
+ * host thread and one OpenMP thread each) evaluate M distinct hypotheses
+ * each at the same time, levels 1 and 2: evaluations per second against
+ * the number of estimators, which tells whether the device or the host
+ * side limits a navigate's pairs per second. --replay: the same with Ni
+ * bare device contexts (both operators at one geometry) replaying the
+ * level-2 evaluation (gpu_eval: its host copies and graph launch, without
+ * a hypothesis's placement or the host's zeta and eta), with pageable and
+ * with pinned host buffers.
  * The CPU figures are of the machine this runs on. */
 #include "sasnav/error.h"
 #include "sasnav/estimator.h"
@@ -26,7 +36,9 @@
 #include "gpu/gpu_eval.h"
 
 #include <complex.h>
+#include <cuda_runtime_api.h>
 #include <math.h>
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -266,9 +278,133 @@ static int estimate_both(const sasnav_run *run, const sasnav_pair_opts *po, sasn
     return rc;
 }
 
+/* --concurrent: n GPU estimators evaluating at once. */
+static int concurrency(const sasnav_run *run, const sasnav_pair_opts *po, sasnav_pose truth, const char *list,
+                       int m)
+{
+    int rc = SASNAV_OK;
+    const char *c = list;
+    while (*c && !rc) {
+        int n = atoi(c);
+        while (*c && *c != ',') c++;
+        if (*c == ',') c++;
+        if (n < 1 || n > 64) continue;
+        sasnav_pair **pp = calloc((size_t)n, sizeof *pp);
+        sasnav_pair_opts o = *po;
+        o.gpu = 1;
+        o.nthreads = 1;
+        sasnav_pose nominal = sasnav_ping_displacement(&run->nav[0], &run->nav[1]);
+        for (int k = 0; k < n && !rc; k++) {
+            rc = sasnav_pair_create(&run->sys, &run->array, &run->win, &o, &pp[k]);
+            if (!rc) rc = sasnav_pair_set_data(pp[k], sasnav_run_ping(run, 0), sasnav_run_ping(run, 1), nominal);
+        }
+        for (int level = 1; level <= 2 && !rc; level++) {
+            int fail = 0;
+            double t = 0;
+            for (int rep = 0; rep < 2 && !fail; rep++) { /* rep 0: warm-up (graph captures) */
+                int mm = rep ? m : 1;
+                double t0 = now();
+#pragma omp parallel for num_threads(n) schedule(static, 1) reduction(| : fail)
+                for (int k = 0; k < n; k++)
+                    for (int j = 0; j < mm; j++) {
+                        sasnav_pose e = {truth.x + 1e-4 * (j + 1) + 1e-5 * k, truth.y, truth.theta};
+                        double z, et, ov;
+                        fail |= sasnav_pair_eval(pp[k], e, level, 0, &z, &et, &ov) != SASNAV_OK;
+                    }
+                t = now() - t0;
+            }
+            if (fail) {
+                rc = SASNAV_ERR_NOT_CONVERGED;
+                break;
+            }
+            printf("concurrent %2d estimators, level %d: %7.1f evaluations/s, %.2f ms per evaluation each\n", n,
+                   level, n * m / t, 1e3 * t / m);
+            fflush(stdout);
+        }
+        for (int k = 0; k < n; k++) sasnav_pair_destroy(pp[k]);
+        free(pp);
+    }
+    return rc;
+}
+
+/* --replay: n contexts replaying gpu_eval at level 2 (k = i = 8). */
+static int replay(const sasnav_run *run, const char *list, int m, int pinned)
+{
+    int nx = 129, ny = 129, np = nx * ny, rc = SASNAV_OK;
+    double pixel = 0.0125;
+    double *x = malloc(sizeof(double) * np), *y = malloc(sizeof(double) * np);
+    for (int j = 0; j < ny; j++)
+        for (int i = 0; i < nx; i++) {
+            x[j * nx + i] = (i - 0.5 * (nx - 1)) * pixel;
+            y[j * nx + i] = 10.0 + (j - 0.5 * (ny - 1)) * pixel;
+        }
+    sasnav_op_opts o;
+    sasnav_op_default_opts(&o);
+    sasnav_op *op = NULL;
+    rc = sasnav_op_create(&run->sys, &run->array, &run->win, np, x, y, &o, &op);
+    free(x);
+    free(y);
+    if (rc) return rc;
+    sasnav_ping_pose local = sasnav_epca_local(0.10, 0.0);
+    sasnav_ping_pose ping = sasnav_ping_place((sasnav_pose){0.004, -0.002, 0.01}, &local);
+    op_view v;
+    rc = sasnav_op_set_geometry(op, &ping);
+    if (!rc) rc = op_view_get(op, &v);
+    size_t nd = (size_t)run->array.n_rx * run->win.n_samples;
+    const char *c = list;
+    while (*c && !rc) {
+        int n = atoi(c);
+        while (*c && *c != ',') c++;
+        if (*c == ',') c++;
+        if (n < 1 || n > 64) continue;
+        gpu_ctx **g = calloc((size_t)n, sizeof *g);
+        size_t nb = (size_t)n * (2 * nd + 4 * (size_t)np);
+        float *buf = NULL;
+        if (pinned) {
+            if (cudaMallocHost((void **)&buf, nb * sizeof(float)) != cudaSuccess) buf = NULL;
+        } else {
+            buf = malloc(nb * sizeof(float));
+        }
+        if (!buf) rc = SASNAV_ERR_NOMEM;
+        for (int k = 0; k < n && !rc; k++) {
+            rc = gpu_create(&v, &g[k]);
+            if (!rc) rc = gpu_set_op(g[k], 0, &v);
+            if (!rc) rc = gpu_set_op(g[k], 1, &v);
+        }
+        for (size_t e = 0; e < nb && buf; e++)
+            buf[e] = (float)((e * 7919) % 1000) * 1e-3f; /* data and rho_p: any non-zero values */
+        int fail = 0;
+        double t = 0;
+        for (int rep = 0; rep < 2 && !rc && !fail; rep++) {
+            int mm = rep ? m : 1;
+            double t0 = now();
+#pragma omp parallel for num_threads(n) schedule(static, 1) reduction(| : fail)
+            for (int k = 0; k < n; k++) {
+                float *b = buf + (size_t)k * (2 * nd + 4 * (size_t)np);
+                float *out = b + 2 * nd + 2 * (size_t)np; /* rho_q, psi_p, psi_q: one buffer */
+                for (int j = 0; j < mm; j++)
+                    fail |= gpu_eval(g[k], b, b + 2 * nd, 8, 8, 0.0, out, out, out) != SASNAV_OK;
+            }
+            t = now() - t0;
+        }
+        if (fail) rc = SASNAV_ERR_NOT_CONVERGED;
+        if (!rc)
+            printf("replay %2d contexts (%s host buffers), level-2 gpu_eval: %7.1f evaluations/s, %.2f ms each\n",
+                   n, pinned ? "pinned" : "pageable", n * m / t, 1e3 * t / m);
+        fflush(stdout);
+        for (int k = 0; k < n; k++) gpu_destroy(g[k]);
+        free(g);
+        if (pinned) cudaFreeHost(buf);
+        else free(buf);
+    }
+    sasnav_op_destroy(op);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     int draws = 3, evals = 20, estimates = 1;
+    const char *concurrent = NULL, *replays = NULL;
     sasnav_pair_opts po;
     sasnav_pair_default_opts(&po);
     po.nthreads = 2;
@@ -277,8 +413,11 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[a], "--threads") && a + 1 < argc) po.nthreads = atoi(argv[++a]);
         else if (!strcmp(argv[a], "--evals") && a + 1 < argc) evals = atoi(argv[++a]);
         else if (!strcmp(argv[a], "--no-estimates")) estimates = 0;
+        else if (!strcmp(argv[a], "--concurrent") && a + 1 < argc) concurrent = argv[++a];
+        else if (!strcmp(argv[a], "--replay") && a + 1 < argc) replays = argv[++a];
         else {
-            fprintf(stderr, "usage: bench_gpu [--draws N] [--threads T] [--evals M] [--no-estimates]\n");
+            fprintf(stderr, "usage: bench_gpu [--draws N] [--threads T] [--evals M] [--no-estimates]"
+                            " [--concurrent N1,N2,...] [--replay N1,N2,...]\n");
             return 2;
         }
     }
@@ -290,6 +429,14 @@ int main(int argc, char **argv)
     po.tx_lag = sc.traj.tx_lag;
     sasnav_run *run = NULL;
     int rc = sasnav_simulate(&sc, NULL, NULL, &run);
+    if (!rc && (concurrent || replays)) {
+        if (concurrent) rc = concurrency(run, &po, sc.traj.pair_error, concurrent, evals);
+        if (!rc && replays) rc = replay(run, replays, evals, 0);
+        if (!rc && replays) rc = replay(run, replays, evals, 1);
+        sasnav_run_free(run);
+        if (rc) fprintf(stderr, "bench_gpu: %s\n", sasnav_last_error());
+        return rc ? 1 : 0;
+    }
     if (!rc) rc = check_operator(run, po.op.tolerance);
     if (!rc) rc = check_evals(run, &po, sc.traj.pair_error, evals);
     double t[3] = {0, 0, 0}, sum_c = 0, sum_g = 0, sum_d = 0;

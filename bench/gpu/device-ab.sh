@@ -3,12 +3,13 @@
 # "Kept contexts, and the GPU path checked again after its review"): the
 # device checks of NEW, then alternating runs of both on the same data
 # (bench_navigate_gpu on paper-trajectory seed 3301, sasnav pair on the
-# paper pair), whether their outputs agree (times aside), and a memory
-# check of NEW's device checks.
+# paper pair, bench_gpu --concurrent where both folders hold it), whether
+# their outputs agree (times aside), and a memory check of NEW's device
+# checks.
 #   sh bench/gpu/device-ab.sh OLD NEW OUT
-# OLD, NEW: folders holding sasnav, bench_navigate_gpu and test_gpu of a
-# -DSASNAV_CUDA=ON build each (and, in NEW/lib, the shared libraries the
-# machine lacks); logs go to OUT.
+# OLD, NEW: folders holding sasnav, bench_navigate_gpu, test_gpu (and
+# optionally bench_gpu) of a -DSASNAV_CUDA=ON build each (and, in NEW/lib,
+# the shared libraries the machine lacks); logs go to OUT.
 set -u
 old=$1
 new=$2
@@ -38,10 +39,21 @@ for r in 1 2 3; do
         run "pair_${v}_$r" 30 "$b/sasnav" pair "$out/pair.h5" --threads 2 --json --gpu
     done
 done
+if [ -x "$old/bench_gpu" ] && [ -x "$new/bench_gpu" ]; then
+    for r in 1 2; do
+        for v in old new; do
+            eval "b=\$$v"
+            run "conc_${v}_$r" 90 "$b/bench_gpu" --concurrent 1,8,16 --evals 20
+        done
+    done
+fi
 for v in old new; do
     eval "b=\$$v"
-    run "navcli_$v" 60 "$b/sasnav" navigate "$out/traj.h5" --gpu --threads 8 --json -o "$out/nav_$v.h5"
-    grep -v 'seconds\|pairs_per_second\|sasnav navigate:' "$out/navcli_$v.txt" > "$out/navcli_$v.strip"
+    timeout 60 "$b/sasnav" navigate "$out/traj.h5" --gpu --threads 8 --json -o "$out/nav_$v.h5" \
+        > "$out/navcli_$v.json" 2> "$out/navcli_$v.err"
+    echo "== navcli_$v exit $?"; grep 'pairs_per_second' "$out/navcli_$v.json"
+    # stdout alone: with stderr in the same file the lines' order may differ
+    grep -v 'seconds\|pairs_per_second' "$out/navcli_$v.json" > "$out/navcli_$v.strip"
     grep -v 'seconds' "$out/pair_${v}_1.txt" > "$out/pair_$v.strip"
 done
 for k in navcli pair; do
@@ -49,5 +61,5 @@ for k in navcli pair; do
     else echo "$k: old and new DIFFER"; fi
 done
 if command -v compute-sanitizer > /dev/null 2>&1; then
-    run memcheck 240 compute-sanitizer --tool memcheck --leak-check full "$new/test_gpu"
+    run memcheck 150 compute-sanitizer --tool memcheck --leak-check full "$new/test_gpu"
 fi

@@ -107,6 +107,10 @@ struct gpu_ctx {
     dev_op op[2];
     chain_ws ws[2];
     float2 *rho_q, *data_q;
+    /* Pinned host staging of gpu_eval's transfers (data_q, rho_p in; rho_q,
+     * psi_p, psi_q out): copies from pageable memory go through the
+     * driver's own staging, which serialises concurrent estimators. */
+    float2 *h_in, *h_out;
     int *h_start, *h_order, *h_cursor;
     cudaEvent_t ev, ev_join;
     int have_ev, have_ev_join;
@@ -571,6 +575,8 @@ extern "C" void gpu_destroy(gpu_ctx *g)
     cudaFree(g->tap_coef);
     cudaFree(g->spectral);
     cudaFree(g->rho_q);
+    if (g->h_in) cudaFreeHost(g->h_in);
+    if (g->h_out) cudaFreeHost(g->h_out);
     cudaFree(g->data_q);
     for (int j = 0; j < N_GRAPHS; j++)
         if (g->graphs[j].have) cudaGraphExecDestroy(g->graphs[j].exec);
@@ -663,6 +669,8 @@ static int create(const op_view *v, gpu_ctx *g)
     CK(cudaMalloc((void **)&g->spectral, (2 * (size_t)g->kmax + 1) * sizeof(float)));
     g->no_graph = !use_graphs;
     CK(cudaMalloc((void **)&g->rho_q, (size_t)g->np * sizeof(float2)));
+    CK(cudaMallocHost((void **)&g->h_in, (g->nd + (size_t)g->np) * sizeof(float2)));
+    CK(cudaMallocHost((void **)&g->h_out, 3 * (size_t)g->np * sizeof(float2)));
     CK(cudaMalloc((void **)&g->data_q, g->nd * sizeof(float2)));
     CK(cudaEventCreateWithFlags(&g->ev, cudaEventDisableTiming));
     g->have_ev = 1;
@@ -856,8 +864,10 @@ extern "C" int gpu_eval(gpu_ctx *g, const float *data_q, const float *rho_p, int
     if (rc) return rc;
     size_t np = (size_t)g->np;
     chain_ws *w0 = &g->ws[0], *w1 = &g->ws[1];
-    CK(cudaMemcpyAsync(g->data_q, data_q, g->nd * sizeof(float2), cudaMemcpyHostToDevice, w0->st));
-    CK(cudaMemcpyAsync(w0->psi, rho_p, np * sizeof(float2), cudaMemcpyHostToDevice, w0->st));
+    memcpy(g->h_in, data_q, g->nd * sizeof(float2));
+    memcpy(g->h_in + g->nd, rho_p, np * sizeof(float2));
+    CK(cudaMemcpyAsync(g->data_q, g->h_in, g->nd * sizeof(float2), cudaMemcpyHostToDevice, w0->st));
+    CK(cudaMemcpyAsync(w0->psi, g->h_in + g->nd, np * sizeof(float2), cudaMemcpyHostToDevice, w0->st));
     eval_graph *eg = NULL;
     if (!g->no_graph) {
         for (int j = 0; j < N_GRAPHS && !eg; j++)
@@ -885,10 +895,13 @@ extern "C" int gpu_eval(gpu_ctx *g, const float *data_q, const float *rho_p, int
     } else if ((rc = enqueue_eval(g, k, i, tikhonov))) {
         return rc;
     }
-    CK(cudaMemcpyAsync(rho_q, g->rho_q, np * sizeof(float2), cudaMemcpyDeviceToHost, w0->st));
-    CK(cudaMemcpyAsync(psi_p, w0->psi, np * sizeof(float2), cudaMemcpyDeviceToHost, w0->st));
-    CK(cudaMemcpyAsync(psi_q, w1->psi, np * sizeof(float2), cudaMemcpyDeviceToHost, w0->st));
+    CK(cudaMemcpyAsync(g->h_out, g->rho_q, np * sizeof(float2), cudaMemcpyDeviceToHost, w0->st));
+    CK(cudaMemcpyAsync(g->h_out + np, w0->psi, np * sizeof(float2), cudaMemcpyDeviceToHost, w0->st));
+    CK(cudaMemcpyAsync(g->h_out + 2 * np, w1->psi, np * sizeof(float2), cudaMemcpyDeviceToHost, w0->st));
     CK(cudaStreamSynchronize(w0->st));
+    memcpy(rho_q, g->h_out, np * sizeof(float2));
+    memcpy(psi_p, g->h_out + np, np * sizeof(float2));
+    memcpy(psi_q, g->h_out + 2 * np, np * sizeof(float2));
     return SASNAV_OK;
 }
 
