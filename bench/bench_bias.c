@@ -16,12 +16,16 @@
  * usage: bench_bias [--seeds S0 N] [--snr DB|inf] [--models fixed,lags,yaw,full]
  *                   [--range-extent M] [--cross-extent M] [--error-extent M]
  *                   [--k K] [--i I] [--scene-range Y0,Y1] [--threads T] [--quiet]
+ *                   [--gpu]
  *
  * --scene-range puts the ripple seabed between ranges Y0 and Y1 (the
  * preset's 9-11 m by default) and widens the recorded swath to hold it:
  * with the grid's --range-extent it measures how the criterion's yaw
  * error depends on the range span of seabed the grid sees
  * (docs/estimator.md, "The yaw floor is the seabed's range span").
+ *
+ * --gpu: the error evaluations on a CUDA GPU (builds with -DSASNAV_CUDA=ON;
+ * the CPU's estimates to float rounding, docs/estimator.md "GPU").
  *
  * Seeds follow `sasnav simulate --seed S` (scene 3S+1, trajectory 3S+2,
  * noise 3S+3). Pairs run in parallel (one estimator per thread, one
@@ -111,7 +115,7 @@ static void usage(void)
 {
     fprintf(stderr, "usage: bench_bias [--seeds S0 N] [--snr DB|inf] [--models fixed,lags,yaw,full]\n"
                     "                  [--range-extent M] [--cross-extent M] [--error-extent M]\n"
-                    "                  [--k K] [--i I] [--scene-range Y0,Y1] [--threads T] [--quiet]\n");
+                    "                  [--k K] [--i I] [--scene-range Y0,Y1] [--threads T] [--quiet] [--gpu]\n");
 }
 
 int main(int argc, char **argv)
@@ -142,6 +146,7 @@ int main(int argc, char **argv)
             }
         } else if (!strcmp(argv[a], "--threads") && a + 1 < argc) threads = atoi(argv[++a]);
         else if (!strcmp(argv[a], "--quiet")) quiet = 1;
+        else if (!strcmp(argv[a], "--gpu")) po.gpu = 1;
         else {
             usage();
             return 2;
