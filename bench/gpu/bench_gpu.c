@@ -69,12 +69,19 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* 1. The operator and CGLS on the paper pair's system. */
-static int check_operator(const sasnav_run *run, double tol)
+/* An operator on the estimator's 129 x 129 grid (1.25 cm pixels about 10 m
+ * range) of the paper pair's system, NUFFT tolerance tol, with a ping
+ * placed off the origin. */
+static int grid_op(const sasnav_run *run, double tol, sasnav_op **out)
 {
     int nx = 129, ny = 129, np = nx * ny;
     double pixel = 0.0125;
     double *x = malloc(sizeof(double) * np), *y = malloc(sizeof(double) * np);
+    if (!x || !y) {
+        free(x);
+        free(y);
+        return SASNAV_ERR_NOMEM;
+    }
     for (int j = 0; j < ny; j++)
         for (int i = 0; i < nx; i++) {
             x[j * nx + i] = (i - 0.5 * (nx - 1)) * pixel;
@@ -83,17 +90,29 @@ static int check_operator(const sasnav_run *run, double tol)
     sasnav_op_opts o;
     sasnav_op_default_opts(&o);
     o.tolerance = tol;
-    sasnav_op *op = NULL;
-    int rc = sasnav_op_create(&run->sys, &run->array, &run->win, np, x, y, &o, &op);
+    int rc = sasnav_op_create(&run->sys, &run->array, &run->win, np, x, y, &o, out);
     free(x);
     free(y);
     if (rc) return rc;
     sasnav_ping_pose local = sasnav_epca_local(0.10, 0.0);
-    sasnav_pose centroid = {0.004, -0.002, 0.01};
-    sasnav_ping_pose ping = sasnav_ping_place(centroid, &local);
-    rc = sasnav_op_set_geometry(op, &ping);
+    sasnav_ping_pose ping = sasnav_ping_place((sasnav_pose){0.004, -0.002, 0.01}, &local);
+    rc = sasnav_op_set_geometry(*out, &ping);
+    if (rc) {
+        sasnav_op_destroy(*out);
+        *out = NULL;
+    }
+    return rc;
+}
+
+/* 1. The operator and CGLS on the paper pair's system. */
+static int check_operator(const sasnav_run *run, double tol)
+{
+    int np = 129 * 129;
+    sasnav_op *op = NULL;
+    int rc = grid_op(run, tol, &op);
+    if (rc) return rc;
     op_view v;
-    if (!rc) rc = op_view_get(op, &v);
+    rc = op_view_get(op, &v);
     gpu_ctx *g = NULL;
     if (!rc) rc = gpu_create(&v, &g);
     if (!rc) rc = gpu_set_op(g, 0, &v);
@@ -131,8 +150,8 @@ static int check_operator(const sasnav_run *run, double tol)
         t0 = now();
         for (int r = 0; r < reps && !rc; r++) rc = sasnav_op_forward(op, img, dat);
         double tc = (now() - t0) / reps;
-        if (!rc) printf("forward with host copies: GPU %.3f ms, CPU %.3f ms (%d threads)\n", 1e3 * tg, 1e3 * tc,
-                        o.nthreads);
+        if (!rc) printf("forward with host copies: GPU %.3f ms, CPU %.3f ms (the operator's default threads)\n",
+                        1e3 * tg, 1e3 * tc);
         if (!rc) printf("device: %s\n", gpu_name(g));
     }
     free(img);
@@ -278,18 +297,27 @@ static int estimate_both(const sasnav_run *run, const sasnav_pair_opts *po, sasn
     return rc;
 }
 
+/* The next number of a comma-separated list ("1,8,16"), the list moved on
+ * past it; 0 at its end. */
+static int next_count(const char **c)
+{
+    if (!**c) return 0;
+    int n = atoi(*c);
+    while (**c && **c != ',') (*c)++;
+    if (**c == ',') (*c)++;
+    return n ? n : -1; /* -1: a 0 or a bad entry, skipped */
+}
+
 /* --concurrent: n GPU estimators evaluating at once. */
 static int concurrency(const sasnav_run *run, const sasnav_pair_opts *po, sasnav_pose truth, const char *list,
                        int m)
 {
     int rc = SASNAV_OK;
     const char *c = list;
-    while (*c && !rc) {
-        int n = atoi(c);
-        while (*c && *c != ',') c++;
-        if (*c == ',') c++;
+    for (int n; !rc && (n = next_count(&c)) != 0;) {
         if (n < 1 || n > 64) continue;
         sasnav_pair **pp = calloc((size_t)n, sizeof *pp);
+        if (!pp) return SASNAV_ERR_NOMEM;
         sasnav_pair_opts o = *po;
         o.gpu = 1;
         o.nthreads = 1;
@@ -330,34 +358,23 @@ static int concurrency(const sasnav_run *run, const sasnav_pair_opts *po, sasnav
 /* --replay: n contexts replaying gpu_eval at level 2 (k = i = 8). */
 static int replay(const sasnav_run *run, const char *list, int m, int pinned)
 {
-    int nx = 129, ny = 129, np = nx * ny, rc = SASNAV_OK;
-    double pixel = 0.0125;
-    double *x = malloc(sizeof(double) * np), *y = malloc(sizeof(double) * np);
-    for (int j = 0; j < ny; j++)
-        for (int i = 0; i < nx; i++) {
-            x[j * nx + i] = (i - 0.5 * (nx - 1)) * pixel;
-            y[j * nx + i] = 10.0 + (j - 0.5 * (ny - 1)) * pixel;
-        }
-    sasnav_op_opts o;
-    sasnav_op_default_opts(&o);
+    int np = 129 * 129;
     sasnav_op *op = NULL;
-    rc = sasnav_op_create(&run->sys, &run->array, &run->win, np, x, y, &o, &op);
-    free(x);
-    free(y);
+    sasnav_op_opts d; /* the operator's default tolerance */
+    sasnav_op_default_opts(&d);
+    int rc = grid_op(run, d.tolerance, &op);
     if (rc) return rc;
-    sasnav_ping_pose local = sasnav_epca_local(0.10, 0.0);
-    sasnav_ping_pose ping = sasnav_ping_place((sasnav_pose){0.004, -0.002, 0.01}, &local);
     op_view v;
-    rc = sasnav_op_set_geometry(op, &ping);
-    if (!rc) rc = op_view_get(op, &v);
+    rc = op_view_get(op, &v);
     size_t nd = (size_t)run->array.n_rx * run->win.n_samples;
     const char *c = list;
-    while (*c && !rc) {
-        int n = atoi(c);
-        while (*c && *c != ',') c++;
-        if (*c == ',') c++;
+    for (int n; !rc && (n = next_count(&c)) != 0;) {
         if (n < 1 || n > 64) continue;
         gpu_ctx **g = calloc((size_t)n, sizeof *g);
+        if (!g) {
+            rc = SASNAV_ERR_NOMEM;
+            break;
+        }
         size_t nb = (size_t)n * (2 * nd + 4 * (size_t)np);
         float *buf = NULL;
         if (pinned) {

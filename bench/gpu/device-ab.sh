@@ -15,10 +15,8 @@ old=$1
 new=$2
 out=$3
 mkdir -p "$out"
-cufft=$(ls /usr/local/cuda/lib64/libcufft.so.12 2>/dev/null ||
-        find /usr /opt -name 'libcufft.so.12' 2>/dev/null | head -n 1)
-LD_LIBRARY_PATH=$new/lib:$(dirname "$cufft")${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
-export LD_LIBRARY_PATH OMP_NUM_THREADS=2
+libdir=$new/lib
+. "$(dirname "$0")/device-env.sh"
 run() { # NAME SECONDS COMMAND...
     name=$1; secs=$2; shift 2
     timeout "$secs" "$@" > "$out/$name.txt" 2>&1

@@ -11,10 +11,8 @@ set -u
 bin=$1
 out=$2
 mkdir -p "$out"
-cufft=$(ls /usr/local/cuda/lib64/libcufft.so.12 2>/dev/null ||
-        find /usr /opt -name 'libcufft.so.12' 2>/dev/null | head -n 1)
-LD_LIBRARY_PATH=$bin/lib:$(dirname "$cufft")${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
-export LD_LIBRARY_PATH OMP_NUM_THREADS=2
+libdir=$bin/lib
+. "$(dirname "$0")/device-env.sh"
 nvidia-smi -L
 timeout 200 "$bin/bench_gpu" --concurrent 1,2,4,8,16 --evals 20 > "$out/concurrent.txt" 2>&1
 echo "== concurrent exit $?"; cat "$out/concurrent.txt"
