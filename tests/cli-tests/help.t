@@ -263,7 +263,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       pair --help')
     --cross-extent M  along-track extent of the estimation grid (see
                       'sasnav pair --help')
-    --range-extent M  range extent of the estimation grid (m, default 1.6)
+    --range-extent M  range extent of the estimation grid (m, default 1.6;
+                      without a gyro a longer grid tells yaw better on a
+                      seabed that fills the swath: 4 m, 3x smaller yaw
+                      errors for 2.5x the time; docs/estimator.md)
     --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)
     --no-aiding       ignore the run's aiding measurements
     --no-resolve      take each pair's own estimate (no joint resolution, no
