@@ -35,7 +35,9 @@
  * sway that the per-pair errors alone give each run (the estimated
  * displacements composed from the first ping against the true ones,
  * expressed in the first ping's frame; no resolution, no alignment:
- * the "paper" way) with the runs within lambda/25. For independent
+ * the "paper" way) with the runs within lambda/25, and which way the
+ * errors lie (the yaw errors' correlation with the surge and sway
+ * errors, the sway per unit yaw). For independent
  * per-pair yaw errors of rms s over n pairs of step L the final sway has
  * an rms of s L sqrt(sum_{k<n} k^2) (6.4 m x s for paper-trajectory);
  * printed as "yaw-only prediction". */
@@ -241,6 +243,23 @@ int main(int argc, char **argv)
     }
     double sumk2 = 0; /* sum_{k < n} k^2 over a run's n pairs */
     for (int k = 0; k < pairs_per_run; k++) sumk2 += (double)k * k;
+    /* Which way the errors lie: the yaw errors' correlation with the surge
+     * and the sway errors, and the sway per unit yaw (the least-squares
+     * slope: a rotation about a point that far behind q's centroid). */
+    for (int m = 0; m < N_MODELS; m++) {
+        if (!use[m] || n_err[m] < 2) continue;
+        int n = n_err[m];
+        double mean[3] = {0, 0, 0}, cov[3][3] = {{0}};
+        for (int j = 0; j < n; j++)
+            for (int c = 0; c < 3; c++) mean[c] += e[m][c][j] / n;
+        for (int j = 0; j < n; j++)
+            for (int a = 0; a < 3; a++)
+                for (int b = 0; b < 3; b++) cov[a][b] += (e[m][a][j] - mean[a]) * (e[m][b][j] - mean[b]);
+        double cs = cov[0][2] / sqrt(cov[0][0] * cov[2][2]), cw = cov[1][2] / sqrt(cov[1][1] * cov[2][2]);
+        printf("%s: yaw error against surge error: correlation %+.2f; against sway error: %+.2f, "
+               "sway = %+.3f m x yaw\n",
+               model_names[m], cs, cw, cov[1][2] / cov[2][2]);
+    }
     printf("\n| model | pairs | not ok | surge mm rms / median / p95 | sway microns rms / median / p95 | "
            "yaw rad rms / median / p95 | final sway mm median / p95 | within lambda/25 | yaw-only "
            "prediction of final sway rms (mm) |\n|---|---|---|---|---|---|---|---|---|\n");
