@@ -37,7 +37,9 @@ for r in 1 2 3; do
         run "pair_${v}_$r" 30 "$b/sasnav" pair "$out/pair.h5" --threads 2 --json --gpu
     done
 done
-if [ -x "$old/bench_gpu" ] && [ -x "$new/bench_gpu" ]; then
+# (only where both binaries have the option: grep finds its name in them)
+if grep -q -- '--concurrent' "$old/bench_gpu" 2>/dev/null &&
+   grep -q -- '--concurrent' "$new/bench_gpu" 2>/dev/null; then
     for r in 1 2; do
         for v in old new; do
             eval "b=\$$v"

@@ -854,18 +854,13 @@ static int capture(gpu_ctx *g, int k, int i, double tikhonov, cudaGraphExec_t *e
     return SASNAV_OK;
 }
 
-extern "C" int gpu_eval(gpu_ctx *g, const float *data_q, const float *rho_p, int k, int i,
-                               double tikhonov, float *rho_q, float *psi_p, float *psi_q)
+/* The evaluation from the staged inputs (g->h_in) to the staged outputs
+ * (g->h_out), stream 0 synchronised at the end. */
+static int eval_staged(gpu_ctx *g, int k, int i, double tikhonov)
 {
-    if (!g || !data_q || !rho_p || !rho_q || !psi_p || !psi_q || k < 0 || i < 0 || !(tikhonov >= 0))
-        return sasnav_set_error(SASNAV_ERR_ARG, "GPU: bad evaluation arguments");
-    int rc = have_op(g, 0);
-    if (!rc) rc = have_op(g, 1);
-    if (rc) return rc;
     size_t np = (size_t)g->np;
     chain_ws *w0 = &g->ws[0], *w1 = &g->ws[1];
-    memcpy(g->h_in, data_q, g->nd * sizeof(float2));
-    memcpy(g->h_in + g->nd, rho_p, np * sizeof(float2));
+    int rc;
     CK(cudaMemcpyAsync(g->data_q, g->h_in, g->nd * sizeof(float2), cudaMemcpyHostToDevice, w0->st));
     CK(cudaMemcpyAsync(w0->psi, g->h_in + g->nd, np * sizeof(float2), cudaMemcpyHostToDevice, w0->st));
     eval_graph *eg = NULL;
@@ -899,6 +894,27 @@ extern "C" int gpu_eval(gpu_ctx *g, const float *data_q, const float *rho_p, int
     CK(cudaMemcpyAsync(g->h_out + np, w0->psi, np * sizeof(float2), cudaMemcpyDeviceToHost, w0->st));
     CK(cudaMemcpyAsync(g->h_out + 2 * np, w1->psi, np * sizeof(float2), cudaMemcpyDeviceToHost, w0->st));
     CK(cudaStreamSynchronize(w0->st));
+    return SASNAV_OK;
+}
+
+extern "C" int gpu_eval(gpu_ctx *g, const float *data_q, const float *rho_p, int k, int i,
+                               double tikhonov, float *rho_q, float *psi_p, float *psi_q)
+{
+    if (!g || !data_q || !rho_p || !rho_q || !psi_p || !psi_q || k < 0 || i < 0 || !(tikhonov >= 0))
+        return sasnav_set_error(SASNAV_ERR_ARG, "GPU: bad evaluation arguments");
+    int rc = have_op(g, 0);
+    if (!rc) rc = have_op(g, 1);
+    if (rc) return rc;
+    size_t np = (size_t)g->np;
+    memcpy(g->h_in, data_q, g->nd * sizeof(float2));
+    memcpy(g->h_in + g->nd, rho_p, np * sizeof(float2));
+    if ((rc = eval_staged(g, k, i, tikhonov))) {
+        /* no copy may still use the staging buffers when the next call
+         * fills them */
+        cudaStreamSynchronize(g->ws[0].st);
+        cudaStreamSynchronize(g->ws[1].st);
+        return rc;
+    }
     memcpy(rho_q, g->h_out, np * sizeof(float2));
     memcpy(psi_p, g->h_out + np, np * sizeof(float2));
     memcpy(psi_q, g->h_out + 2 * np, np * sizeof(float2));
