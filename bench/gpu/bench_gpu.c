@@ -109,12 +109,12 @@ static int grid_op(const sasnav_run *run, double tol, sasnav_op **out)
 /* 1. The operator and CGLS on the paper pair's system. */
 static int check_operator(const sasnav_run *run, double tol)
 {
-    int np = 129 * 129;
     sasnav_op *op = NULL;
     int rc = grid_op(run, tol, &op);
     if (rc) return rc;
     op_view v;
     rc = op_view_get(op, &v);
+    int np = rc ? 0 : v.n_points;
     gpu_ctx *g = NULL;
     if (!rc) rc = gpu_create(&v, &g);
     if (!rc) rc = gpu_set_op(g, 0, &v);
@@ -365,7 +365,6 @@ static int concurrency(const sasnav_run *run, const sasnav_pair_opts *po, sasnav
 /* --replay: n contexts replaying gpu_eval at level 2 (k = i = 8). */
 static int replay(const sasnav_run *run, const char *list, int m, int pinned)
 {
-    int np = 129 * 129;
     char message[256] = "";
     sasnav_op *op = NULL;
     sasnav_op_opts d; /* the operator's default tolerance */
@@ -374,6 +373,7 @@ static int replay(const sasnav_run *run, const char *list, int m, int pinned)
     if (rc) return rc;
     op_view v;
     rc = op_view_get(op, &v);
+    int np = rc ? 0 : v.n_points;
     size_t nd = (size_t)run->array.n_rx * run->win.n_samples;
     const char *c = list;
     for (int n; !rc && (n = next_count(&c)) != 0;) {

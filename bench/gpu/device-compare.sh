@@ -20,10 +20,8 @@ set -u
 dir=$1
 out=$2
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader 2>&1
-cufft=$(ls /usr/local/cuda/lib64/libcufft.so.12 2>/dev/null ||
-        find /usr /opt -name 'libcufft.so.12' 2>/dev/null | head -n 1)
-LD_LIBRARY_PATH=$dir:$(dirname "$cufft")${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
-export LD_LIBRARY_PATH OMP_NUM_THREADS=2
+libdir=$dir
+. "$(dirname "$0")/device-env.sh"
 run() { # NAME SECONDS COMMAND...
     name=$1; secs=$2; shift 2
     timeout "$secs" "$@" > "$out/$name.txt" 2>&1
