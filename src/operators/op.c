@@ -214,14 +214,17 @@ static void spread_flush(spread_run *run, int wpad, float *re, float *im)
  * over all channels and reduced once per point, channels in increasing order.
  * Two loop orders, with identical results:
  * - interp_points_W (point outer, channel inner): the lanes stay in
- *   registers; best when the pair data sit in cache (80 x 128 grids);
+ *   registers, but every point's channels make one chain of additions and
+ *   3 x n_rx interleaved streams of pair data; best only on small grids
+ *   whose pair data sit in L2 (40 x 40: about 5 % faster);
  * - interp_stream_W (channel outer): the block's pair data are read as one
- *   sequential stream, the lanes go through L1; best when the pair data come
- *   from DRAM (2x faster on 256 x 256 grids, where the point-outer order
- *   makes 3 x n_rx interleaved streams that the prefetchers do not follow).
+ *   sequential stream, the lanes go through L1 and consecutive pairs do not
+ *   wait on each other; bench_op 1e-3, one thread: 1.16x faster on 64 x 64,
+ *   1.38x on 80 x 128, 1.40x on 129 x 129 (the estimator's levels 1-2),
+ *   2x on 256 x 256 (docs/estimator.md, "The adjoint's loop order").
  * sasnav_op_create picks one from the size of the pair data (STREAM_BYTES). */
 #ifndef STREAM_BYTES
-#define STREAM_BYTES (16u << 20)
+#define STREAM_BYTES (1u << 20)
 #endif
 
 static void store_point(sasnav_cfloat *rho, int n, float sr, float si, int accumulate)
