@@ -68,6 +68,15 @@ static void print_pose(const char *label, sasnav_pose e)
            e.theta);
 }
 
+/* A value for the text output, or "-" where it was not computed (NaN: the
+ * zeta of a pair stopped for want of overlap, the scan's zeta of a
+ * candidate that was not found by a scan: a slip-check neighbour). */
+static void format_value(char *buf, size_t size, const char *fmt, double v)
+{
+    if (isfinite(v)) snprintf(buf, size, fmt, v);
+    else snprintf(buf, size, "-");
+}
+
 int cmd_pair(int argc, char **argv)
 {
     static const struct option longopts[] = {
@@ -307,16 +316,21 @@ int cmd_pair(int argc, char **argv)
         }
         printf("displacement   x %.6f m   y %.6f m   theta %.6e rad\n", r->displacement.x, r->displacement.y,
                r->displacement.theta);
-        if (r->ambiguity > 0.8 && fix_yaw)
+        /* No hint where the estimate stopped (without overlap there is no
+         * valley to choose in). */
+        int hint = r->status == SASNAV_OK && r->ambiguity > 0.8;
+        if (hint && fix_yaw)
             printf("ambiguity %.2f: the second surge candidate, a phase-centre spacing away, is nearly "
                    "as good (compact scene at a squint?%s)\n", r->ambiguity,
                    surge_sigma > 0 ? "" : " consider --surge-sigma");
-        else if (r->ambiguity > 0.8)
+        else if (hint)
             printf("ambiguity %.2f: the second surge-yaw candidate of the valley is nearly as good "
                    "(compact scene? consider --yaw-sigma)\n", r->ambiguity);
-        printf("zeta %.4g  eta %.4g  overlap %.3g  evaluations %d (global %d, zeta %d, eta %d)  "
+        char zeta_s[32];
+        format_value(zeta_s, sizeof zeta_s, "%.4g", r->zeta);
+        printf("zeta %s  eta %.4g  overlap %.3g  evaluations %d (global %d, zeta %d, eta %d)  "
                "operator applications %ld  %.2f s  status %s\n",
-               r->zeta, r->eta, r->overlap, r->evaluations, r->evaluations_global, r->evaluations_zeta,
+               zeta_s, r->eta, r->overlap, r->evaluations, r->evaluations_global, r->evaluations_zeta,
                r->evaluations_eta, r->applications, r->seconds,
                r->status == SASNAV_OK ? "converged" : sasnav_strerror(r->status));
         printf("time per stage: global %.2f s (%ld applications), zeta %.2f s (%ld), eta %.2f s (%ld), "
@@ -326,9 +340,11 @@ int cmd_pair(int argc, char **argv)
                r->evaluations_final);
         for (int kc = 0; kc < r->n_candidates; kc++) {
             const sasnav_pair_candidate *c = &r->candidates[kc];
-            printf("candidate %d%s  surge %+8.3f mm  sway %+9.4f mm  yaw %+.4e rad  zeta(scan) %.4f", kc,
+            char scan_s[32];
+            format_value(scan_s, sizeof scan_s, "%.4f", c->zeta_scan);
+            printf("candidate %d%s  surge %+8.3f mm  sway %+9.4f mm  yaw %+.4e rad  zeta(scan) %s", kc,
                    kc == r->chosen ? "*" : " ", 1e3 * c->error.x, 1e3 * c->error.y, c->error.theta,
-                   c->zeta_scan);
+                   scan_s);
             if (c->refined) printf("  eta(level 1) %.4f", c->eta);
             if (c->same_as >= 0) printf("  (= candidate %d)", c->same_as);
             printf("\n");
