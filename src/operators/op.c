@@ -216,10 +216,10 @@ static void spread_flush(spread_run *run, int wpad, float *re, float *im)
  * - interp_points_W (point outer, channel inner): the lanes stay in
  *   registers, but every point's channels make one chain of additions and
  *   3 x n_rx interleaved streams of pair data; best only on small grids
- *   whose pair data sit in L2 (40 x 40: about 5 % faster);
+ *   whose pair data sit in L2 (40 x 40: about 8 % faster);
  * - interp_stream_W (channel outer): the block's pair data are read as one
  *   sequential stream, the lanes go through L1 and consecutive pairs do not
- *   wait on each other; bench_op 1e-3, one thread: 1.16x faster on 64 x 64,
+ *   wait on each other; bench_op 1e-3, one thread: 1.18x faster on 64 x 64,
  *   1.38x on 80 x 128, 1.40x on 129 x 129 (the estimator's levels 1-2),
  *   2x on 256 x 256 (docs/estimator.md, "The adjoint's loop order").
  * sasnav_op_create picks one from the size of the pair data (STREAM_BYTES). */
