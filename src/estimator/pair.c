@@ -6,6 +6,7 @@
  * ping p (computed once per level: reuse of p's work across evaluations),
  * and work buffers. */
 #include "pair_internal.h"
+#include "operators/op_team.h"
 #ifdef SASNAV_HAVE_CUDA
 #include "gpu/gpu_eval.h"
 #endif
@@ -688,6 +689,73 @@ static int intersect_both(sasnav_pair *pr, pair_level *lv, sasnav_op *op_p, sasn
     return SASNAV_OK;
 }
 
+/* rho_q = T_q^+ d_q, psi_p = (Q_p Q_q)^i rho_p and psi_q = (Q_q Q_p)^i rho_q
+ * (Q x = T^+ T x, T^+ by k CGLS iterations) for the operators' current
+ * geometries. The two chains apply the two projectors alternately, psi_p's
+ * starting with Q_q and psi_q's with Q_p; with psi_q's chain one step
+ * behind, both use the same operator at every step, so each step applies
+ * it to the two chains' images at once (op_team.h: the pair data are read
+ * once for both; docs/estimator.md, "Both chains through one operator"):
+ *
+ *   step s = 0 .. 2i, operator Q_q at even s, Q_p at odd s;
+ *   psi_p's chain at its step s (s < 2i), psi_q's at its step s - 1 (s >= 1);
+ *   at step 0 the CGLS of rho_q (on T_q) runs beside psi_p's first one.
+ *
+ * A chain's step j reads rho (j = 0), psi (even j) or tmp (odd j) and
+ * writes tmp (even j) or psi (odd j). Every result is the bits of the
+ * chains computed one after the other (intersect_both). Used where the
+ * operators have one thread (navigate's estimators, `pair --threads 1`):
+ * the team functions could share the applications between threads too,
+ * but at one barrier or more per application that was measured slower on
+ * a shared two-core machine than the chains side by side
+ * (docs/estimator.md). */
+static int project_chains(sasnav_pair *pr, pair_level *lv)
+{
+    sasnav_op *op_p = lv->op_p, *op_q = lv->op_q;
+    int rc = op_team_prepare(op_p);
+    if (!rc) rc = op_team_prepare(op_q);
+    if (rc) return rc;
+    int steps = 2 * lv->i, k = lv->k;
+    double lam = pr->opts.tikhonov;
+    cgls_team_state st[2];
+    /* A region of its own (one thread): the team functions then see a team
+     * of one whatever region the caller runs in (navigate runs one pair per
+     * thread). */
+    sasnav_cfloat *rho[2] = {lv->rho_p, lv->rho_q}, *psi[2] = {lv->psi_p, lv->psi_q};
+    sasnav_cfloat *tmp[2] = {lv->tmp, lv->tmp2}, *dt[2] = {lv->data_tmp, lv->data_tmp2};
+    sasnav_cfloat *work[2] = {lv->cgls_work, lv->cgls_work2};
+#pragma omp parallel num_threads(1)
+    {
+        /* step 0: T_q rho_p, then T_q^+ of it beside rho_q = T_q^+ d_q */
+        const sasnav_cfloat *in[2] = {lv->rho_p, NULL};
+        sasnav_cfloat *out[2] = {lv->data_tmp, NULL};
+        op_forward_team(op_q, 1, in, out);
+        const sasnav_cfloat *cg_in[2] = {lv->data_tmp, pr->data_q};
+        sasnav_cfloat *cg_out[2] = {lv->tmp, lv->rho_q};
+        cgls_team(op_q, 2, cg_in, k, lam, cg_out, work, st);
+        for (int s = 1; s <= steps; s++) {
+            sasnav_op *op = s % 2 == 0 ? op_q : op_p;
+            int m = 0;
+            sasnav_cfloat *wk[2];
+            for (int c = 0; c < 2; c++) {
+                int j = c == 0 ? s : s - 1; /* the chain's own step */
+                if (j >= steps) continue;
+                in[m] = j == 0 ? rho[c] : j % 2 == 0 ? psi[c] : tmp[c];
+                cg_out[m] = j % 2 == 0 ? tmp[c] : psi[c];
+                out[m] = dt[c];
+                cg_in[m] = dt[c];
+                wk[m] = work[c];
+                m++;
+            }
+            op_forward_team(op, m, in, out);
+            cgls_team(op, m, cg_in, k, lam, cg_out, wk, st);
+        }
+    }
+    /* the nominal counts of the chains computed one by one */
+    pr->applications += cgls_cost(k) + 2L * steps * (1 + cgls_cost(k));
+    return SASNAV_OK;
+}
+
 #ifdef SASNAV_HAVE_CUDA
 /* rho_q, psi_p and psi_q of the evaluation on the GPU (src/gpu/): the same
  * steps as the CPU path. p's operator is copied to the device (once per
@@ -814,15 +882,22 @@ int sasnav_pair_eval(sasnav_pair *pr, sasnav_pose error, int level, int blurred,
     {
         rc = place_q(pr, level, error);
         if (rc) return rc;
-        sasnav_cgls_opts co = {lv->k, pr->opts.tikhonov};
-        rc = sasnav_cgls(lv->op_q, pr->data_q, &co, lv->rho_q, lv->cgls_work);
-        pr->applications += cgls_cost(lv->k);
-        if (rc) return rc;
-        /* psi_p = (Q_p Q_q)^i rho_p and psi_q = (Q_q Q_p)^i rho_q */
-        memcpy(lv->psi_p, lv->rho_p, sizeof(sasnav_cfloat) * np);
-        memcpy(lv->psi_q, lv->rho_q, sizeof(sasnav_cfloat) * np);
-        rc = intersect_both(pr, lv, lv->op_p, lv->op_q);
-        if (rc) return rc;
+        if (op_threads(lv->op_q) == 1 && op_threads(lv->op_p) == 1) {
+            /* one thread: both chains through each operator at once */
+            rc = project_chains(pr, lv);
+            if (rc) return rc;
+        } else {
+            /* two or more: the chains side by side (intersect_both) */
+            sasnav_cgls_opts co = {lv->k, pr->opts.tikhonov};
+            rc = sasnav_cgls(lv->op_q, pr->data_q, &co, lv->rho_q, lv->cgls_work);
+            pr->applications += cgls_cost(lv->k);
+            if (rc) return rc;
+            /* psi_p = (Q_p Q_q)^i rho_p and psi_q = (Q_q Q_p)^i rho_q */
+            memcpy(lv->psi_p, lv->rho_p, sizeof(sasnav_cfloat) * np);
+            memcpy(lv->psi_q, lv->rho_q, sizeof(sasnav_cfloat) * np);
+            rc = intersect_both(pr, lv, lv->op_p, lv->op_q);
+            if (rc) return rc;
+        }
     }
     pr->evaluations++;
     /* Error window: the operators' grid is wider than the compared region

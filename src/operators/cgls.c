@@ -8,6 +8,7 @@
  * iteration's T^H (it only prepares a next direction). */
 #include "sasnav/error.h"
 #include "sasnav/image.h"
+#include "operators/op_team.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -82,4 +83,106 @@ int sasnav_cgls(sasnav_op *op, const sasnav_cfloat *data, const sasnav_cgls_opts
 done:
     free(own);
     return rc;
+}
+
+/* ------------------------------------------------------------------------ */
+/* CGLS of one or two systems in lockstep on a team (op_team.h): the steps
+ * of sasnav_cgls above, system by system, with the operator applied to the
+ * systems still iterating at once. The `omp for` loops over the systems
+ * bind to the caller's parallel region (one system per thread with two
+ * threads) and end with a barrier, after which every thread reads the same
+ * shared flags. */
+
+/* The systems still iterating, in order (the same list on every thread). */
+static int team_active(int n, const cgls_team_state *st, int *which)
+{
+    int m = 0;
+    for (int c = 0; c < n; c++)
+        if (st[c].active) which[m++] = c;
+    return m;
+}
+
+void cgls_team(const sasnav_op *op, int n, const sasnav_cfloat *const *data, int iterations,
+               double tikhonov, sasnav_cfloat *const *x, sasnav_cfloat *const *work,
+               cgls_team_state *st)
+{
+    size_t np = (size_t)sasnav_op_n_points(op);
+    size_t nd = (size_t)sasnav_op_n_rx(op) * (size_t)sasnav_op_n_samples(op);
+    /* per system: s = work, p = work + np, r = work + 2 np, q = work + 2 np + nd */
+#define S_(c) (work[c])
+#define P_(c) (work[c] + np)
+#define R_(c) (work[c] + 2 * np)
+#define Q_(c) (work[c] + 2 * np + nd)
+#pragma omp for schedule(static, 1)
+    for (int c = 0; c < n; c++) {
+        memset(x[c], 0, sizeof(sasnav_cfloat) * np);
+        memcpy(R_(c), data[c], sizeof(sasnav_cfloat) * nd);
+        st[c].active = iterations > 0;
+    }
+    if (iterations <= 0) return;
+    const sasnav_cfloat *in[2];
+    sasnav_cfloat *out[2];
+    for (int c = 0; c < n; c++) {
+        in[c] = R_(c);
+        out[c] = S_(c);
+    }
+    op_adjoint_team(op, n, in, out); /* s = T^H r - lambda x, x = 0 */
+#pragma omp for schedule(static, 1)
+    for (int c = 0; c < n; c++) {
+        memcpy(P_(c), S_(c), sizeof(sasnav_cfloat) * np);
+        st[c].gamma = st[c].gamma0 = norm2(S_(c), np);
+    }
+    int which[2];
+    for (int it = 0; it < iterations; it++) {
+        /* sasnav_cgls's loop condition, per system */
+#pragma omp for schedule(static, 1)
+        for (int c = 0; c < n; c++)
+            if (st[c].active && !(st[c].gamma > 1e-12 * st[c].gamma0)) st[c].active = 0;
+        int m = team_active(n, st, which);
+        if (!m) break;
+        for (int k = 0; k < m; k++) {
+            in[k] = P_(which[k]);
+            out[k] = Q_(which[k]);
+        }
+        op_forward_team(op, m, in, out);
+#pragma omp for schedule(static, 1)
+        for (int k = 0; k < m; k++) {
+            int c = which[k];
+            sasnav_cfloat *p = P_(c), *q = Q_(c), *r = R_(c), *xc = x[c];
+            double delta = norm2(q, nd) + tikhonov * norm2(p, np);
+            if (!(delta > 0)) {
+                st[c].active = 0;
+                continue;
+            }
+            float alpha = (float)(st[c].gamma / delta);
+            for (size_t i = 0; i < np; i++) xc[i] += alpha * p[i];
+            if (it == iterations - 1) continue;
+            for (size_t i = 0; i < nd; i++) r[i] -= alpha * q[i];
+        }
+        if (it == iterations - 1) break;
+        m = team_active(n, st, which);
+        if (!m) break;
+        for (int k = 0; k < m; k++) {
+            in[k] = R_(which[k]);
+            out[k] = S_(which[k]);
+        }
+        op_adjoint_team(op, m, in, out);
+#pragma omp for schedule(static, 1)
+        for (int k = 0; k < m; k++) {
+            int c = which[k];
+            sasnav_cfloat *s = S_(c), *p = P_(c), *xc = x[c];
+            if (tikhonov > 0) {
+                float lam = (float)tikhonov;
+                for (size_t i = 0; i < np; i++) s[i] -= lam * xc[i];
+            }
+            double gamma_new = norm2(s, np);
+            float beta = (float)(gamma_new / st[c].gamma);
+            for (size_t i = 0; i < np; i++) p[i] = s[i] + beta * p[i];
+            st[c].gamma = gamma_new;
+        }
+    }
+#undef S_
+#undef P_
+#undef R_
+#undef Q_
 }

@@ -40,6 +40,7 @@
 #include "sasnav/op.h"
 #include "sasnav/error.h"
 #include "operators/op_view.h"
+#include "operators/op_team.h"
 #include "signal/kernel.h"
 
 #include <fftw3.h>
@@ -93,6 +94,9 @@ typedef struct {
 typedef void (*spread_fn)(const sasnav_op *op, int l, int b, const sasnav_cfloat *rho, float *re,
                           float *im, spread_run *run);
 typedef void (*interp_fn)(const sasnav_op *op, int block, sasnav_cfloat *rho, int accumulate);
+typedef void (*spread2_fn)(const sasnav_op *op, int l, int b, const sasnav_cfloat *rho0,
+                           const sasnav_cfloat *rho1, spread_run *run0, spread_run *run1);
+typedef void (*interp2_fn)(const sasnav_op *op, int block, sasnav_cfloat *rho0, sasnav_cfloat *rho1);
 typedef void (*taps_fn)(const sasnav_op *op, int count, const float *t, const float *keep,
                         float *taps);
 
@@ -127,10 +131,15 @@ struct sasnav_op {
     /* FFT plans and work buffers. */
     fftwf_plan fine_fwd, fine_bwd, coarse_fwd, coarse_bwd;
     op_work *work;          /* one per thread */
+    float *adj2_re, *adj2_im; /* a second set, for the second image of the team
+                                 applications (op_team.h; allocated by
+                                 op_team_prepare) */
     float *adj_re, *adj_im; /* n_rx split fine grids (lf + ext each): spread by T,
                                interpolated by T^H */
     spread_fn spread;
+    spread2_fn spread2;
     interp_fn interp;
+    interp2_fn interp2;
     taps_fn taps_eval;
     int tap_degree;
     float *tap_coef;        /* (tap_degree + 1) x wpad polynomial coefficients */
@@ -331,6 +340,128 @@ DEFINE_INTERP(4)
 DEFINE_INTERP(8)
 DEFINE_INTERP(12)
 DEFINE_INTERP(16)
+
+/* Two images through the same pair data (op_team.h): the loops above with a
+ * second set of sums. The shared work (the pair data read, the runs found,
+ * the taps loaded) is done once; each image's sums are the same operations
+ * in the same order as spread_W / interp_stream_W on it alone, so each
+ * result is the same bits as one image's. bench: two images of a 129 x 129
+ * grid spread in 1.57x the time of one instead of 2x. */
+#define DEFINE_SPREAD2(W)                                                                  \
+    HOT_LOOP static void spread2_##W(const sasnav_op *op, int l, int b,                    \
+                                     const sasnav_cfloat *rho0, const sasnav_cfloat *rho1, \
+                                     spread_run *run0, spread_run *run1)                   \
+    {                                                                                      \
+        const float *r0 = (const float *)rho0, *r1 = (const float *)rho1;                  \
+        int n0 = b * BLOCK;                                                                \
+        int count = op->n_points - n0 < BLOCK ? op->n_points - n0 : BLOCK;                 \
+        size_t q0 = ((size_t)b * (size_t)op->n_rx + (size_t)l) * BLOCK;                    \
+        size_t stride = (size_t)op->lf + (size_t)op->ext;                                  \
+        float *restrict re0 = op->adj_re + (size_t)l * stride;                             \
+        float *restrict im0 = op->adj_im + (size_t)l * stride;                             \
+        float *restrict re1 = op->adj2_re + (size_t)l * stride;                            \
+        float *restrict im1 = op->adj2_im + (size_t)l * stride;                            \
+        const int32_t *restrict index = op->index + q0;                                    \
+        const float *restrict green = op->green + 2 * q0;                                  \
+        const float *restrict taps = op->taps + q0 * W;                                    \
+        float c_r[BLOCK], c_i[BLOCK], d_r[BLOCK], d_i[BLOCK];                              \
+        _Pragma("omp simd") for (int k = 0; k < count; k++)                                \
+        {                                                                                  \
+            float gr = green[2 * k], gi = green[2 * k + 1];                                \
+            float rr = r0[2 * (n0 + k)], ri = r0[2 * (n0 + k) + 1];                        \
+            c_r[k] = gr * rr - gi * ri;                                                    \
+            c_i[k] = gr * ri + gi * rr;                                                    \
+            float sr = r1[2 * (n0 + k)], si = r1[2 * (n0 + k) + 1];                        \
+            d_r[k] = gr * sr - gi * si;                                                    \
+            d_i[k] = gr * si + gi * sr;                                                    \
+        }                                                                                  \
+        float a_r[W], a_i[W], b_r[W], b_i[W];                                              \
+        for (int j = 0; j < W; j++) {                                                      \
+            a_r[j] = run0->re[j];                                                          \
+            a_i[j] = run0->im[j];                                                          \
+            b_r[j] = run1->re[j];                                                          \
+            b_i[j] = run1->im[j];                                                          \
+        }                                                                                  \
+        int32_t first = run0->first;                                                       \
+        for (int i = 0; i < count; i++) {                                                  \
+            if (index[i] != first) {                                                       \
+                _Pragma("omp simd") for (int j = 0; j < W; j++)                            \
+                {                                                                          \
+                    re0[first + j] += a_r[j];                                              \
+                    im0[first + j] += a_i[j];                                              \
+                    re1[first + j] += b_r[j];                                              \
+                    im1[first + j] += b_i[j];                                              \
+                    a_r[j] = a_i[j] = b_r[j] = b_i[j] = 0.0f;                              \
+                }                                                                          \
+                first = index[i];                                                          \
+            }                                                                              \
+            float cr = c_r[i], ci = c_i[i], dr = d_r[i], di = d_i[i];                      \
+            const float *restrict t = taps + (size_t)i * W;                                \
+            _Pragma("omp simd") for (int j = 0; j < W; j++)                                \
+            {                                                                              \
+                a_r[j] += t[j] * cr;                                                       \
+                a_i[j] += t[j] * ci;                                                       \
+                b_r[j] += t[j] * dr;                                                       \
+                b_i[j] += t[j] * di;                                                       \
+            }                                                                              \
+        }                                                                                  \
+        for (int j = 0; j < W; j++) {                                                      \
+            run0->re[j] = a_r[j];                                                          \
+            run0->im[j] = a_i[j];                                                          \
+            run1->re[j] = b_r[j];                                                          \
+            run1->im[j] = b_i[j];                                                          \
+        }                                                                                  \
+        run0->first = run1->first = first;                                                 \
+    }
+
+#define DEFINE_INTERP2(W)                                                                  \
+    HOT_LOOP static void interp2_##W(const sasnav_op *op, int b, sasnav_cfloat *rho0,      \
+                                     sasnav_cfloat *rho1)                                  \
+    {                                                                                      \
+        int n0 = b * BLOCK;                                                                \
+        int count = op->n_points - n0 < BLOCK ? op->n_points - n0 : BLOCK;                 \
+        size_t stride = (size_t)op->lf + (size_t)op->ext;                                  \
+        float a_r[BLOCK][W], a_i[BLOCK][W], b_r[BLOCK][W], b_i[BLOCK][W];                  \
+        for (int i = 0; i < count; i++)                                                    \
+            for (int j = 0; j < W; j++) a_r[i][j] = a_i[i][j] = b_r[i][j] = b_i[i][j] = 0.0f; \
+        for (int l = 0; l < op->n_rx; l++) {                                               \
+            for (int i = 0; i < count; i++) {                                              \
+                size_t q = ((size_t)b * (size_t)op->n_rx + (size_t)l) * BLOCK + (size_t)i; \
+                const float *restrict t_ = op->taps + q * W;                               \
+                size_t o_ = (size_t)l * stride + (size_t)op->index[q];                     \
+                const float *restrict fr_ = op->adj_re + o_, *restrict fi_ = op->adj_im + o_; \
+                const float *restrict gr_ = op->adj2_re + o_, *restrict gi_ = op->adj2_im + o_; \
+                float g_r = op->green[2 * q], g_i = op->green[2 * q + 1];                  \
+                _Pragma("omp simd") for (int j = 0; j < W; j++)                            \
+                {                                                                          \
+                    float a_ = t_[j] * g_r, c_ = t_[j] * g_i;                              \
+                    a_r[i][j] += a_ * fr_[j] + c_ * fi_[j];                                \
+                    a_i[i][j] += a_ * fi_[j] - c_ * fr_[j];                                \
+                    b_r[i][j] += a_ * gr_[j] + c_ * gi_[j];                                \
+                    b_i[i][j] += a_ * gi_[j] - c_ * gr_[j];                                \
+                }                                                                          \
+            }                                                                              \
+        }                                                                                  \
+        for (int i = 0; i < count; i++) {                                                  \
+            float sr = 0.0f, si = 0.0f, ur = 0.0f, ui = 0.0f;                              \
+            for (int j = 0; j < W; j++) {                                                  \
+                sr += a_r[i][j];                                                           \
+                si += a_i[i][j];                                                           \
+                ur += b_r[i][j];                                                           \
+                ui += b_i[i][j];                                                           \
+            }                                                                              \
+            store_point(rho0, n0 + i, sr, si, 0);                                          \
+            store_point(rho1, n0 + i, ur, ui, 0);                                          \
+        }                                                                                  \
+    }
+DEFINE_SPREAD2(4)
+DEFINE_SPREAD2(8)
+DEFINE_SPREAD2(12)
+DEFINE_SPREAD2(16)
+DEFINE_INTERP2(4)
+DEFINE_INTERP2(8)
+DEFINE_INTERP2(12)
+DEFINE_INTERP2(16)
 
 /* ------------------------------------------------------------------------ */
 /* Options and sizes. */
@@ -540,21 +671,29 @@ static void select_kernels(sasnav_op *op)
     switch (op->wpad) {
     case 4:
         op->spread = spread_4;
+        op->spread2 = spread2_4;
+        op->interp2 = interp2_4;
         op->interp = stream ? interp_stream_4 : interp_points_4;
         op->taps_eval = taps_4;
         break;
     case 8:
         op->spread = spread_8;
+        op->spread2 = spread2_8;
+        op->interp2 = interp2_8;
         op->interp = stream ? interp_stream_8 : interp_points_8;
         op->taps_eval = taps_8;
         break;
     case 12:
         op->spread = spread_12;
+        op->spread2 = spread2_12;
+        op->interp2 = interp2_12;
         op->interp = stream ? interp_stream_12 : interp_points_12;
         op->taps_eval = taps_12;
         break;
     default:
         op->spread = spread_16;
+        op->spread2 = spread2_16;
+        op->interp2 = interp2_16;
         op->interp = stream ? interp_stream_16 : interp_points_16;
         op->taps_eval = taps_16;
         break;
@@ -654,6 +793,8 @@ void sasnav_op_destroy(sasnav_op *op)
     }
     fftwf_free(op->adj_re);
     fftwf_free(op->adj_im);
+    fftwf_free(op->adj2_re);
+    fftwf_free(op->adj2_im);
     free_point_storage(op);
     free(op->spectral);
     free(op->tap_coef);
@@ -1055,7 +1196,8 @@ static void forward_group(const sasnav_op *op, int l0, int l1, const sasnav_cflo
 
 /* The transposed steps of the forward operator up to the fine grid, which is left
  * (split, with its periodic extension) in op->adj_re/adj_im for channel l. */
-static void adjoint_channel(const sasnav_op *op, int l, const sasnav_cfloat *data, op_work *w)
+static void adjoint_channel_to(const sasnav_op *op, int l, const sasnav_cfloat *data, op_work *w,
+                               float *re_base, float *im_base)
 {
     int lf = op->lf, mp = op->mp, ext = op->ext, kmax = op->kmax;
     size_t fine = (size_t)lf + (size_t)ext;
@@ -1071,7 +1213,7 @@ static void adjoint_channel(const sasnav_op *op, int l, const sasnav_cfloat *dat
         ff[2 * kf + 1] = r * fc[2 * kc + 1];
     }
     fft(op->fine_bwd, ff);
-    float *restrict re = op->adj_re + (size_t)l * fine, *restrict im = op->adj_im + (size_t)l * fine;
+    float *restrict re = re_base + (size_t)l * fine, *restrict im = im_base + (size_t)l * fine;
     for (int j = 0; j < lf; j++) {
         re[j] = ff[2 * j];
         im[j] = ff[2 * j + 1];
@@ -1080,6 +1222,11 @@ static void adjoint_channel(const sasnav_op *op, int l, const sasnav_cfloat *dat
         re[lf + j] = re[j];
         im[lf + j] = im[j];
     }
+}
+
+static void adjoint_channel(const sasnav_op *op, int l, const sasnav_cfloat *data, op_work *w)
+{
+    adjoint_channel_to(op, l, data, w, op->adj_re, op->adj_im);
 }
 
 static int check_apply(const sasnav_op *op, const void *in, const void *out)
@@ -1129,6 +1276,94 @@ int sasnav_op_adjoint(sasnav_op *op, const sasnav_cfloat *data, sasnav_cfloat *r
 int sasnav_op_adjoint_add(sasnav_op *op, const sasnav_cfloat *data, sasnav_cfloat *rho)
 {
     return adjoint(op, data, rho, 1);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Team applications (op_team.h). */
+
+int op_team_prepare(sasnav_op *op)
+{
+    if (!op) return sasnav_set_error(SASNAV_ERR_ARG, "op: NULL argument");
+    if (!op->have_geometry)
+        return sasnav_set_error(SASNAV_ERR_ARG, "op: sasnav_op_set_geometry has not succeeded");
+    if (!op->adj2_re) {
+        size_t n = (size_t)op->n_rx * ((size_t)op->lf + (size_t)op->ext);
+        op->adj2_re = fftwf_malloc(n * sizeof(float));
+        op->adj2_im = fftwf_malloc(n * sizeof(float));
+        if (!op->adj2_re || !op->adj2_im) {
+            fftwf_free(op->adj2_re);
+            fftwf_free(op->adj2_im);
+            op->adj2_re = op->adj2_im = NULL;
+            return sasnav_set_error(SASNAV_ERR_NOMEM, "op: out of memory (second fine grids)");
+        }
+    }
+    return SASNAV_OK;
+}
+
+int op_threads(const sasnav_op *op) { return op ? op->nthreads : 0; }
+
+/* This thread's share [*a, *b) of n items: contiguous, in thread order. */
+static void team_share(int n, int *a, int *b)
+{
+    int nt = omp_get_num_threads(), t = omp_get_thread_num();
+    int size = (n + nt - 1) / nt;
+    *a = t * size < n ? t * size : n;
+    *b = *a + size < n ? *a + size : n;
+}
+
+void op_forward_team(const sasnav_op *op, int n, const sasnav_cfloat *const *rho,
+                     sasnav_cfloat *const *data)
+{
+    int l0, l1;
+    team_share(op->n_rx, &l0, &l1);
+    op_work *w = &op->work[omp_get_thread_num()];
+    if (n == 1) {
+        if (l0 < l1) forward_group(op, l0, l1, rho[0], data[0], w);
+    } else if (l0 < l1) {
+        size_t fine = (size_t)op->lf + (size_t)op->ext;
+        spread_run run0[SASNAV_MAX_RX], run1[SASNAV_MAX_RX];
+        memset(run0, 0, (size_t)(l1 - l0) * sizeof run0[0]);
+        memset(run1, 0, (size_t)(l1 - l0) * sizeof run1[0]);
+        for (int l = l0; l < l1; l++) {
+            memset(op->adj_re + (size_t)l * fine, 0, fine * sizeof(float));
+            memset(op->adj_im + (size_t)l * fine, 0, fine * sizeof(float));
+            memset(op->adj2_re + (size_t)l * fine, 0, fine * sizeof(float));
+            memset(op->adj2_im + (size_t)l * fine, 0, fine * sizeof(float));
+        }
+        for (int b = 0; b < op->n_blocks; b++)
+            for (int l = l0; l < l1; l++)
+                op->spread2(op, l, b, rho[0], rho[1], &run0[l - l0], &run1[l - l0]);
+        for (int l = l0; l < l1; l++) {
+            float *re = op->adj_re + (size_t)l * fine, *im = op->adj_im + (size_t)l * fine;
+            spread_flush(&run0[l - l0], op->wpad, re, im);
+            forward_finish(op, re, im, data[0] + (size_t)l * (size_t)op->n_samples, w);
+            re = op->adj2_re + (size_t)l * fine;
+            im = op->adj2_im + (size_t)l * fine;
+            spread_flush(&run1[l - l0], op->wpad, re, im);
+            forward_finish(op, re, im, data[1] + (size_t)l * (size_t)op->n_samples, w);
+        }
+    }
+#pragma omp barrier
+}
+
+void op_adjoint_team(const sasnav_op *op, int n, const sasnav_cfloat *const *data,
+                     sasnav_cfloat *const *rho)
+{
+    int a, b;
+    op_work *w = &op->work[omp_get_thread_num()];
+    team_share(op->n_rx, &a, &b);
+    for (int l = a; l < b; l++) {
+        size_t off = (size_t)l * (size_t)op->n_samples;
+        adjoint_channel_to(op, l, data[0] + off, w, op->adj_re, op->adj_im);
+        if (n == 2) adjoint_channel_to(op, l, data[1] + off, w, op->adj2_re, op->adj2_im);
+    }
+#pragma omp barrier
+    team_share(op->n_blocks, &a, &b);
+    for (int k = a; k < b; k++) {
+        if (n == 1) op->interp(op, k, rho[0], 0);
+        else op->interp2(op, k, rho[0], rho[1]);
+    }
+#pragma omp barrier
 }
 
 /* ------------------------------------------------------------------------ */
