@@ -357,6 +357,7 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
 void sasnav_pair_destroy(sasnav_pair *pr)
 {
     if (!pr) return;
+    sasnav_pair_destroy(pr->twin);
     for (int v = 0; v < PAIR_LEVELS; v++) level_free(&pr->level[v]);
     free(pr->data_p);
     free(pr->data_q);
@@ -412,6 +413,9 @@ static int take_data(sasnav_pair *pr, const sasnav_cfloat *data_p, const sasnav_
 static int make_levels(sasnav_pair *pr)
 {
     int rc = SASNAV_OK;
+    sasnav_pair_destroy(pr->twin); /* of the previous data */
+    pr->twin = NULL;
+    pr->twin_failed = 0;
     double xc = 0.5 * pr->nominal.x;
     for (int v = 0; v < PAIR_LEVELS && !rc; v++)
         rc = level_make_ops(pr, &pr->level[v], xc, v == 2 ? &pr->level[1] : NULL);
@@ -882,8 +886,9 @@ int sasnav_pair_eval(sasnav_pair *pr, sasnav_pose error, int level, int blurred,
     {
         rc = place_q(pr, level, error);
         if (rc) return rc;
-        if (op_threads(lv->op_q) == 1 && op_threads(lv->op_p) == 1) {
-            /* one thread: both chains through each operator at once */
+        if ((op_threads(lv->op_q) == 1 && op_threads(lv->op_p) == 1) || omp_in_parallel()) {
+            /* one thread (or a thread of the caller's team, as beside a
+             * twin): both chains through each operator at once */
             rc = project_chains(pr, lv);
             if (rc) return rc;
         } else {
@@ -1065,6 +1070,49 @@ int pair_image_shift(sasnav_pair *pr, int level, sasnav_pose error, double *sx, 
 }
 
 size_t pair_level_points(const sasnav_pair *pr, int level) { return pr->level[level].np; }
+
+sasnav_pair *pair_twin(sasnav_pair *pr)
+{
+    if (!pr || !pr->ready || pr->opts.gpu || omp_in_parallel()) return NULL;
+    int threads = pr->opts.nthreads > 0 ? pr->opts.nthreads : omp_get_max_threads();
+    if (threads < 2 || pr->twin_failed) return NULL;
+    if (pr->twin) return pr->twin;
+    sasnav_pair_opts o = pr->opts;
+    o.nthreads = 1;
+    sasnav_pair *tw = NULL;
+    int rc = sasnav_pair_create(&pr->sys, &pr->array, &pr->win, &o, &tw);
+    if (!rc && pr->per_channel) {
+        rc = sasnav_pair_set_data_channels(tw, pr->data_p, pr->data_q, pr->nominal, pr->chan_p,
+                                           pr->chan_q);
+    } else if (!rc) {
+        rc = take_data(tw, pr->data_p, pr->data_q, pr->nominal);
+        if (!rc) {
+            tw->local_p = pr->local_p;
+            tw->local_q = pr->local_q;
+            rc = make_levels(tw);
+        }
+    }
+    if (!rc) tw->pc_spacing = pr->pc_spacing;
+    if (rc) {
+        /* no twin: the caller evaluates one hypothesis at a time */
+        sasnav_pair_destroy(tw);
+        pr->twin_failed = 1;
+        return NULL;
+    }
+    tw->applications = 0;
+    tw->evaluations = 0;
+    pr->twin = tw;
+    return tw;
+}
+
+void pair_twin_merge(sasnav_pair *pr)
+{
+    if (!pr || !pr->twin) return;
+    pr->applications += pr->twin->applications;
+    pr->evaluations += pr->twin->evaluations;
+    pr->twin->applications = 0;
+    pr->twin->evaluations = 0;
+}
 
 int pair_eval_residual(sasnav_pair *pr, sasnav_pose error, int level, int use_eta,
                        sasnav_cfloat *r, double *f)

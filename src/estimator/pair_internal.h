@@ -71,6 +71,11 @@ struct sasnav_pair {
     pair_level level[PAIR_LEVELS];
     long applications;
     int evaluations;
+    /* A second estimator on the same data and geometry, one thread, for
+     * evaluating two hypotheses at once (pair_twin); NULL until needed,
+     * dropped with new data. twin_failed: it could not be made. */
+    struct sasnav_pair *twin;
+    int twin_failed;
 };
 
 /* Scale (m) of the Gaussian high-pass applied to the moduli before their
@@ -94,5 +99,16 @@ int pair_image_shift(sasnav_pair *pr, int level, sasnav_pose error, double *sx, 
 int pair_eval_residual(sasnav_pair *pr, sasnav_pose error, int level, int use_eta,
                        sasnav_cfloat *r, double *f);
 size_t pair_level_points(const sasnav_pair *pr, int level);
+
+/* The estimator's twin (made at the first call): the same data, geometry
+ * and options but one thread, whose evaluations are the same bits as the
+ * estimator's own. NULL where it would not help or cannot be had: one
+ * thread (opts.nthreads), inside a parallel region (navigate's one pair
+ * per thread), the GPU path, or no memory. Each of the two objects may
+ * then evaluate on its own thread, never both on one object at once. */
+sasnav_pair *pair_twin(sasnav_pair *pr);
+/* Adds the twin's evaluations and operator applications since the last
+ * call to the estimator's own counts. */
+void pair_twin_merge(sasnav_pair *pr);
 
 #endif

@@ -18,6 +18,8 @@
 
 #include <math.h>
 #include <nlopt.h>
+#include <omp.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -168,6 +170,42 @@ static int stage_residual(stage_ctx *c, const double *u, sasnav_cfloat *r, doubl
     return pair_eval_residual(c->pr, from_unit(c, u), c->level, c->use_eta, r, f);
 }
 
+/* Residuals at n unit points (n evaluations counted). With the
+ * estimator's twin (pair_twin: two threads or more) two at a time, point j
+ * on the estimator (even j) or its twin (odd j), each on its own thread
+ * and with both projection chains through one operator (pair.c,
+ * project_chains); every residual is the same bits either way. */
+static int stage_residuals(stage_ctx *c, int n, const double (*u)[3], sasnav_cfloat *const *r,
+                           double *f)
+{
+    c->evals += n;
+    sasnav_pair *twin = n > 1 ? pair_twin(c->pr) : NULL;
+    if (!twin) {
+        for (int j = 0; j < n; j++) {
+            int rc = pair_eval_residual(c->pr, from_unit(c, u[j]), c->level, c->use_eta, r[j], &f[j]);
+            if (rc) return rc;
+        }
+        return SASNAV_OK;
+    }
+    int rc[2] = {SASNAV_OK, SASNAV_OK};
+    char msg[2][512] = {"", ""};
+#pragma omp parallel num_threads(2)
+    {
+        int t = omp_get_thread_num(), nt = omp_get_num_threads();
+        for (int j = t; j < n; j += nt) {
+            int s = j % 2;
+            if (rc[s]) continue;
+            rc[s] = pair_eval_residual(s ? twin : c->pr, from_unit(c, u[j]), c->level, c->use_eta,
+                                       r[j], &f[j]);
+            if (rc[s]) snprintf(msg[s], sizeof msg[s], "%s", sasnav_last_error());
+        }
+    }
+    pair_twin_merge(c->pr);
+    for (int s = 0; s < 2; s++)
+        if (rc[s]) return sasnav_set_error(rc[s], "%s", msg[s]);
+    return SASNAV_OK;
+}
+
 /* The trial point of lm_stage becomes (dnew, unew) with residual *r1 and
  * values Fn = fn^2 P^2, fn (the buffers of the old trial and the new one
  * swap). */
@@ -222,13 +260,17 @@ static int lm_stage(stage_ctx *c, sasnav_pose start, sasnav_pose step, sasnav_po
     double mu = 1e-3;
     while (!rc && c->evals < max_evals) {
         if (!have_j) {
-            for (int k = 0; k < n && !rc; k++) {
-                double ut[3] = {u[0], u[1], u[2]}, hk = u[k] + h <= ub[k] ? h : -h;
-                ut[k] += hk;
-                rc = stage_residual(c, ut, rt, &ft);
-                for (size_t j = 0; !rc && j < np; j++) J[k][j] = (rt[j] - r0[j]) / (float)hk;
+            /* the n forward differences at once (stage_residuals), into J */
+            double ut[3][3], hk[3], fk[3];
+            for (int k = 0; k < n; k++) {
+                for (int m = 0; m < 3; m++) ut[k][m] = u[m];
+                hk[k] = u[k] + h <= ub[k] ? h : -h;
+                ut[k][k] += hk[k];
             }
+            rc = stage_residuals(c, n, (const double(*)[3])ut, J, fk);
             if (rc) break;
+            for (int k = 0; k < n; k++)
+                for (size_t j = 0; j < np; j++) J[k][j] = (J[k][j] - r0[j]) / (float)hk[k];
             have_j = fresh = 1;
         }
         /* Normal equations of the model |r0 + J d|^2 P^2 (double). */
@@ -426,22 +468,26 @@ static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, doubl
     for (int round = 0; round < rounds && !rc; round++) {
         /* Measure the model around the anchor `at`. */
         c->centre = at;
-        double u0[3] = {0, 0, 0}, f;
-        rc = stage_residual(c, u0, r0, &fat);
-        for (int k = 0; k < n && !rc; k++) {
-            double up[3] = {0, 0, 0}, um[3] = {0, 0, 0};
-            up[k] = h;
-            um[k] = -h;
-            rc = stage_residual(c, up, J[k], &f); /* r(+h e_k), for now */
-            if (!rc) rc = stage_residual(c, um, Rd[k], &f); /* r(-h e_k) */
+        /* the model's points: the anchor, +-h e_k, h (e_k + e_m); all at
+         * once (stage_residuals) */
+        double um[10][3] = {{0}}, fm[10];
+        sasnav_cfloat *rm[10];
+        int nm = 0;
+        rm[nm++] = r0;
+        for (int k = 0; k < n; k++) {
+            um[nm][k] = h;
+            rm[nm++] = J[k]; /* r(+h e_k), for now */
+            um[nm][k] = -h;
+            rm[nm++] = Rd[k]; /* r(-h e_k) */
         }
-        for (int q = 0; q < npair && !rc; q++) {
-            double uu[3] = {0, 0, 0};
-            uu[pairs[q][0]] = h;
-            uu[pairs[q][1]] = h;
-            rc = stage_residual(c, uu, Rx[q], &f);
+        for (int q = 0; q < npair; q++) {
+            um[nm][pairs[q][0]] = h;
+            um[nm][pairs[q][1]] = h;
+            rm[nm++] = Rx[q];
         }
+        rc = stage_residuals(c, nm, (const double(*)[3])um, rm, fm);
         if (rc) break;
+        fat = fm[0];
         const float ih2 = (float)(1.0 / (h * h)), i2h = (float)(0.5 / h);
         /* R_km = (r(h, h) - r(h, 0) - r(0, h) + r0) / h^2, before r(+h e_k)
          * becomes J_k. */
