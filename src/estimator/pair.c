@@ -722,12 +722,12 @@ static int project_chains(sasnav_pair *pr, pair_level *lv)
     int steps = 2 * lv->i, k = lv->k;
     double lam = pr->opts.tikhonov;
     cgls_team_state st[2];
-    /* A region of its own (one thread): the team functions then see a team
-     * of one whatever region the caller runs in (navigate runs one pair per
-     * thread). */
     sasnav_cfloat *rho[2] = {lv->rho_p, lv->rho_q}, *psi[2] = {lv->psi_p, lv->psi_q};
     sasnav_cfloat *tmp[2] = {lv->tmp, lv->tmp2}, *dt[2] = {lv->data_tmp, lv->data_tmp2};
     sasnav_cfloat *work[2] = {lv->cgls_work, lv->cgls_work2};
+    /* A region of its own (one thread): the team functions then see a team
+     * of one whatever region the caller runs in (navigate runs one pair per
+     * thread, stage_residuals one hypothesis per thread). */
 #pragma omp parallel num_threads(1)
     {
         /* step 0: T_q rho_p, then T_q^+ of it beside rho_q = T_q^+ d_q */
