@@ -23,8 +23,13 @@
  * Threads: distinct estimator objects may be used concurrently, one object
  * by one thread at a time (sasnav_navigate runs one per thread over pairs);
  * the sasnav_system / array / window and data passed in may be shared
- * read-only. Its operators use opts.nthreads OpenMP threads (0 =
- * omp_get_max_threads() at create); results do not depend on that number.
+ * read-only. It uses opts.nthreads OpenMP threads (0 =
+ * omp_get_max_threads() at create): with one, both projection chains of an
+ * evaluation go through each operator at once; with two or more, single
+ * evaluations run the chains side by side and the searches' batches of
+ * hypotheses are evaluated two at a time, one on a one-thread twin of the
+ * estimator (made at the first batch: about twice the memory; none inside
+ * another parallel region). Results do not depend on that number.
  * create, set_data (it rebuilds the operators) and destroy plan FFTW under
  * the planner lock of op.h.
  */
@@ -109,7 +114,7 @@ typedef struct {
     double verdict_margin_min;/* level-1 eta of the best other candidate over
                                  the chosen one's below which the estimate
                                  is "ambiguous" (default 1.15) */
-    int nthreads;          /* OpenMP threads for the operators (0 = default) */
+    int nthreads;          /* OpenMP threads (0 = default; see "Threads" above) */
     sasnav_op_opts op;     /* operator options (default: sasnav_op's, with
                               tolerance 1e-3: docs/estimator.md) */
     int gpu;               /* 1: the error evaluations on a CUDA GPU (builds
