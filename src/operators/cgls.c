@@ -93,12 +93,19 @@ done:
  * threads) and end with a barrier, after which every thread reads the same
  * shared flags. */
 
-/* The systems still iterating, in order (the same list on every thread). */
-static int team_active(int n, const cgls_team_state *st, int *which)
+/* The systems still iterating, in order (the same list on every thread),
+ * and the vectors at offsets a and b of their work areas as the inputs and
+ * outputs of an application. */
+static int team_active(int n, const cgls_team_state *st, sasnav_cfloat *const *work, size_t a,
+                       size_t b, int *which, const sasnav_cfloat **in, sasnav_cfloat **out)
 {
     int m = 0;
     for (int c = 0; c < n; c++)
-        if (st[c].active) which[m++] = c;
+        if (st[c].active) {
+            in[m] = work[c] + a;
+            out[m] = work[c] + b;
+            which[m++] = c;
+        }
     return m;
 }
 
@@ -138,12 +145,8 @@ void cgls_team(const sasnav_op *op, int n, const sasnav_cfloat *const *data, int
 #pragma omp for schedule(static, 1)
         for (int c = 0; c < n; c++)
             if (st[c].active && !(st[c].gamma > 1e-12 * st[c].gamma0)) st[c].active = 0;
-        int m = team_active(n, st, which);
+        int m = team_active(n, st, work, np, 2 * np + nd, which, in, out); /* p -> q */
         if (!m) break;
-        for (int k = 0; k < m; k++) {
-            in[k] = P_(which[k]);
-            out[k] = Q_(which[k]);
-        }
         op_forward_team(op, m, in, out);
 #pragma omp for schedule(static, 1)
         for (int k = 0; k < m; k++) {
@@ -160,12 +163,8 @@ void cgls_team(const sasnav_op *op, int n, const sasnav_cfloat *const *data, int
             for (size_t i = 0; i < nd; i++) r[i] -= alpha * q[i];
         }
         if (it == iterations - 1) break;
-        m = team_active(n, st, which);
+        m = team_active(n, st, work, 2 * np, 0, which, in, out); /* r -> s */
         if (!m) break;
-        for (int k = 0; k < m; k++) {
-            in[k] = R_(which[k]);
-            out[k] = S_(which[k]);
-        }
         op_adjoint_team(op, m, in, out);
 #pragma omp for schedule(static, 1)
         for (int k = 0; k < m; k++) {

@@ -1172,26 +1172,35 @@ static void forward_finish(const sasnav_op *op, float *restrict re, float *restr
  * channel. (One channel at a time reads 2.8 kB pieces 45 kB apart, which the
  * prefetchers follow badly: 256 x 256 grids ran 2x slower.) Each channel's
  * grid is summed in point order whatever the grouping, so results do not
- * depend on it. */
-static void forward_group(const sasnav_op *op, int l0, int l1, const sasnav_cfloat *rho,
-                          sasnav_cfloat *data, op_work *w)
+ * depend on it. n = 2: a second image at once, into op->adj2_re/adj2_im
+ * (spread2_W; op_team.h). */
+static void forward_group(const sasnav_op *op, int n, int l0, int l1,
+                          const sasnav_cfloat *const *rho, sasnav_cfloat *const *data, op_work *w)
 {
     size_t fine = (size_t)op->lf + (size_t)op->ext;
-    spread_run run[SASNAV_MAX_RX];
-    memset(run, 0, (size_t)(l1 - l0) * sizeof run[0]);
-    for (int l = l0; l < l1; l++) {
-        memset(op->adj_re + (size_t)l * fine, 0, fine * sizeof(float));
-        memset(op->adj_im + (size_t)l * fine, 0, fine * sizeof(float));
+    float *re[2] = {op->adj_re, op->adj2_re}, *im[2] = {op->adj_im, op->adj2_im};
+    spread_run run[2][SASNAV_MAX_RX];
+    for (int c = 0; c < n; c++) {
+        memset(run[c], 0, (size_t)(l1 - l0) * sizeof run[c][0]);
+        for (int l = l0; l < l1; l++) {
+            memset(re[c] + (size_t)l * fine, 0, fine * sizeof(float));
+            memset(im[c] + (size_t)l * fine, 0, fine * sizeof(float));
+        }
     }
     for (int b = 0; b < op->n_blocks; b++)
-        for (int l = l0; l < l1; l++)
-            op->spread(op, l, b, rho, op->adj_re + (size_t)l * fine, op->adj_im + (size_t)l * fine,
-                       &run[l - l0]);
-    for (int l = l0; l < l1; l++) {
-        float *re = op->adj_re + (size_t)l * fine, *im = op->adj_im + (size_t)l * fine;
-        spread_flush(&run[l - l0], op->wpad, re, im);
-        forward_finish(op, re, im, data + (size_t)l * (size_t)op->n_samples, w);
-    }
+        for (int l = l0; l < l1; l++) {
+            if (n == 2)
+                op->spread2(op, l, b, rho[0], rho[1], &run[0][l - l0], &run[1][l - l0]);
+            else
+                op->spread(op, l, b, rho[0], re[0] + (size_t)l * fine, im[0] + (size_t)l * fine,
+                           &run[0][l - l0]);
+        }
+    for (int l = l0; l < l1; l++)
+        for (int c = 0; c < n; c++) {
+            float *gr = re[c] + (size_t)l * fine, *gi = im[c] + (size_t)l * fine;
+            spread_flush(&run[c][l - l0], op->wpad, gr, gi);
+            forward_finish(op, gr, gi, data[c] + (size_t)l * (size_t)op->n_samples, w);
+        }
 }
 
 /* The transposed steps of the forward operator up to the fine grid, which is left
@@ -1247,7 +1256,7 @@ int sasnav_op_forward(sasnav_op *op, const sasnav_cfloat *rho, sasnav_cfloat *da
 #pragma omp parallel for num_threads(op->nthreads) schedule(dynamic, 1)
     for (int g = 0; g < n_groups; g++) {
         int l0 = g * size, l1 = l0 + size < op->n_rx ? l0 + size : op->n_rx;
-        forward_group(op, l0, l1, rho, data, &op->work[omp_get_thread_num()]);
+        forward_group(op, 1, l0, l1, &rho, &data, &op->work[omp_get_thread_num()]);
     }
     return SASNAV_OK;
 }
@@ -1316,33 +1325,7 @@ void op_forward_team(const sasnav_op *op, int n, const sasnav_cfloat *const *rho
 {
     int l0, l1;
     team_share(op->n_rx, &l0, &l1);
-    op_work *w = &op->work[omp_get_thread_num()];
-    if (n == 1) {
-        if (l0 < l1) forward_group(op, l0, l1, rho[0], data[0], w);
-    } else if (l0 < l1) {
-        size_t fine = (size_t)op->lf + (size_t)op->ext;
-        spread_run run0[SASNAV_MAX_RX], run1[SASNAV_MAX_RX];
-        memset(run0, 0, (size_t)(l1 - l0) * sizeof run0[0]);
-        memset(run1, 0, (size_t)(l1 - l0) * sizeof run1[0]);
-        for (int l = l0; l < l1; l++) {
-            memset(op->adj_re + (size_t)l * fine, 0, fine * sizeof(float));
-            memset(op->adj_im + (size_t)l * fine, 0, fine * sizeof(float));
-            memset(op->adj2_re + (size_t)l * fine, 0, fine * sizeof(float));
-            memset(op->adj2_im + (size_t)l * fine, 0, fine * sizeof(float));
-        }
-        for (int b = 0; b < op->n_blocks; b++)
-            for (int l = l0; l < l1; l++)
-                op->spread2(op, l, b, rho[0], rho[1], &run0[l - l0], &run1[l - l0]);
-        for (int l = l0; l < l1; l++) {
-            float *re = op->adj_re + (size_t)l * fine, *im = op->adj_im + (size_t)l * fine;
-            spread_flush(&run0[l - l0], op->wpad, re, im);
-            forward_finish(op, re, im, data[0] + (size_t)l * (size_t)op->n_samples, w);
-            re = op->adj2_re + (size_t)l * fine;
-            im = op->adj2_im + (size_t)l * fine;
-            spread_flush(&run1[l - l0], op->wpad, re, im);
-            forward_finish(op, re, im, data[1] + (size_t)l * (size_t)op->n_samples, w);
-        }
-    }
+    if (l0 < l1) forward_group(op, n, l0, l1, rho, data, &op->work[omp_get_thread_num()]);
 #pragma omp barrier
 }
 
