@@ -451,6 +451,14 @@ typedef float v4sf __attribute__((vector_size(16)));
         memcpy((p), &s_, sizeof s_);                                                       \
     } while (0)
 
+typedef int32_t v16si __attribute__((vector_size(64)));
+typedef int32_t v8si __attribute__((vector_size(32)));
+typedef int32_t v4si __attribute__((vector_size(16)));
+
+/* The fine grids end with READ_PAD floats of padding (fine_grids): the
+ * window of 16 floats read at the smallest of four indices stays inside. */
+#define READ_PAD 16
+
 static inline __attribute__((always_inline)) void
 interp2_four_4(const float *restrict t, const float *restrict g, const int32_t *x,
                const float *const *fine, float *restrict ar, float *restrict ai,
@@ -463,10 +471,36 @@ interp2_four_4(const float *restrict t, const float *restrict g, const int32_t *
     v16sf GR = __builtin_shufflevector(g8, g8, 0, 0, 0, 0, 2, 2, 2, 2, 4, 4, 4, 4, 6, 6, 6, 6);
     v16sf GI = __builtin_shufflevector(g8, g8, 1, 1, 1, 1, 3, 3, 3, 3, 5, 5, 5, 5, 7, 7, 7, 7);
     v16sf A = T * GR, C = T * GI;
-    LOAD_FOUR(FR, fine[0], x);
-    LOAD_FOUR(FI, fine[1], x);
-    LOAD_FOUR(HR, fine[2], x);
-    LOAD_FOUR(HI, fine[3], x);
+    int32_t lo = x[0], hi = x[0];
+    for (int k = 1; k < 4; k++) {
+        lo = x[k] < lo ? x[k] : lo;
+        hi = x[k] > hi ? x[k] : hi;
+    }
+    if (hi - lo <= 12) {
+        /* Neighbouring points (almost always): one window of 16 fine
+         * samples per grid, the lanes picked from it. */
+        v4si x4;
+        memcpy(&x4, x, sizeof x4);
+        x4 -= lo;
+        /* widened in two steps: in one, GCC 12 went through the stack */
+        v8si x8 = __builtin_shufflevector(x4, x4, 0, 1, 2, 3, 4, 5, 6, 7);
+        v16si sel = __builtin_shufflevector(x8, x8, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3);
+        sel += (v16si){0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3};
+        v16sf w0, w1, w2, w3;
+        memcpy(&w0, fine[0] + lo, sizeof w0);
+        memcpy(&w1, fine[1] + lo, sizeof w1);
+        memcpy(&w2, fine[2] + lo, sizeof w2);
+        memcpy(&w3, fine[3] + lo, sizeof w3);
+        FR = __builtin_shuffle(w0, sel);
+        FI = __builtin_shuffle(w1, sel);
+        HR = __builtin_shuffle(w2, sel);
+        HI = __builtin_shuffle(w3, sel);
+    } else {
+        LOAD_FOUR(FR, fine[0], x);
+        LOAD_FOUR(FI, fine[1], x);
+        LOAD_FOUR(HR, fine[2], x);
+        LOAD_FOUR(HI, fine[3], x);
+    }
     ADD_TO(ar, A * FR + C * FI);
     ADD_TO(ai, A * FI - C * FR);
     ADD_TO(br, A * HR + C * HI);
@@ -716,13 +750,22 @@ static void free_point_storage(sasnav_op *op)
     op->cap_points = 0;
 }
 
+/* n floats of split fine grids and READ_PAD zeros after them (read, never
+ * used, by interp2_four_4). */
+static float *fine_grids(size_t n)
+{
+    float *f = fftwf_malloc((n + READ_PAD) * sizeof(float));
+    if (f) memset(f + n, 0, READ_PAD * sizeof(float));
+    return f;
+}
+
 static int setup_storage(sasnav_op *op)
 {
     int rc = setup_point_storage(op);
     if (rc) return rc;
     size_t fine = (size_t)op->lf + (size_t)op->ext;
-    op->adj_re = fftwf_malloc((size_t)op->n_rx * fine * sizeof(float));
-    op->adj_im = fftwf_malloc((size_t)op->n_rx * fine * sizeof(float));
+    op->adj_re = fine_grids(op->n_rx * fine);
+    op->adj_im = fine_grids(op->n_rx * fine);
     op->work = calloc((size_t)op->nthreads, sizeof *op->work);
     if (!op->adj_re || !op->adj_im || !op->work)
         return sasnav_set_error(SASNAV_ERR_NOMEM, "op: out of memory (%zu pairs)", op->n_pairs);
@@ -1388,8 +1431,8 @@ int op_team_prepare(sasnav_op *op)
         return sasnav_set_error(SASNAV_ERR_ARG, "op: sasnav_op_set_geometry has not succeeded");
     if (!op->adj2_re) {
         size_t n = (size_t)op->n_rx * ((size_t)op->lf + (size_t)op->ext);
-        op->adj2_re = fftwf_malloc(n * sizeof(float));
-        op->adj2_im = fftwf_malloc(n * sizeof(float));
+        op->adj2_re = fine_grids(n);
+        op->adj2_im = fine_grids(n);
         if (!op->adj2_re || !op->adj2_im) {
             fftwf_free(op->adj2_re);
             fftwf_free(op->adj2_im);
