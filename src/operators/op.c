@@ -248,6 +248,114 @@ static void store_point(sasnav_cfloat *rho, int n, float sr, float si, int accum
     }
 }
 
+/* Four consecutive points of one channel into the sums of n = 1 or 2 images
+ * at once (interp_stream_W, interp2_W): lanes (point, tap), 4 W of them,
+ * each with the operations of the one-point loops in the same order, so the
+ * same bits. For W = 4
+ * in 16-float vectors (GCC's vector extensions: one AVX-512 register per
+ * sum where the target has them, two or four narrower ones elsewhere), the
+ * four points' fine samples loaded 4 at a time and put side by side.
+ * Branch-free: a first version that took only four points of one run (one
+ * kernel index, one load) and branched otherwise was no faster (the
+ * branch follows the runs' irregular ends); this one makes `sasnav pair
+ * --threads 1` 1.06x faster (docs/estimator.md, "The adjoint's loop
+ * order"). */
+typedef float v16sf __attribute__((vector_size(64)));
+typedef float v8sf __attribute__((vector_size(32)));
+typedef float v4sf __attribute__((vector_size(16)));
+
+/* v = the 4 floats at p + x[0], then at p + x[1], p + x[2], p + x[3]. */
+#define LOAD_FOUR(v, p, x)                                                                 \
+    do {                                                                                   \
+        v4sf f0_, f1_, f2_, f3_;                                                           \
+        memcpy(&f0_, (p) + (x)[0], sizeof f0_);                                            \
+        memcpy(&f1_, (p) + (x)[1], sizeof f1_);                                            \
+        memcpy(&f2_, (p) + (x)[2], sizeof f2_);                                            \
+        memcpy(&f3_, (p) + (x)[3], sizeof f3_);                                            \
+        v8sf lo_ = __builtin_shufflevector(f0_, f1_, 0, 1, 2, 3, 4, 5, 6, 7);              \
+        v8sf hi_ = __builtin_shufflevector(f2_, f3_, 0, 1, 2, 3, 4, 5, 6, 7);              \
+        (v) = __builtin_shufflevector(lo_, hi_, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12,  \
+                                      13, 14, 15);                                         \
+    } while (0)
+
+#define ADD_TO(p, d)                                                                       \
+    do {                                                                                   \
+        v16sf s_;                                                                          \
+        memcpy(&s_, (p), sizeof s_);                                                       \
+        s_ += (d);                                                                         \
+        memcpy((p), &s_, sizeof s_);                                                       \
+    } while (0)
+
+typedef int32_t v16si __attribute__((vector_size(64)));
+typedef int32_t v8si __attribute__((vector_size(32)));
+typedef int32_t v4si __attribute__((vector_size(16)));
+
+/* The fine grids end with READ_PAD floats of padding (fine_grids): the
+ * window of 16 floats read at the smallest of four indices stays inside. */
+#define READ_PAD 16
+
+/* fine: the 2n split grids (re, im of each image) of the channel; sum: the
+ * 2n sums (re, im of each image) of the four points, 4 W floats each. */
+static inline __attribute__((always_inline)) void
+interp_four_4(int n, const float *restrict t, const float *restrict g, const int32_t *x,
+              const float *const *fine, float *const *sum)
+{
+    v8sf g8;
+    v16sf T, F[4];
+    memcpy(&g8, g, sizeof g8); /* (re, im) of G for the four points */
+    memcpy(&T, t, sizeof T);
+    v16sf GR = __builtin_shufflevector(g8, g8, 0, 0, 0, 0, 2, 2, 2, 2, 4, 4, 4, 4, 6, 6, 6, 6);
+    v16sf GI = __builtin_shufflevector(g8, g8, 1, 1, 1, 1, 3, 3, 3, 3, 5, 5, 5, 5, 7, 7, 7, 7);
+    v16sf A = T * GR, C = T * GI;
+    int32_t lo = x[0], hi = x[0];
+    for (int k = 1; k < 4; k++) {
+        lo = x[k] < lo ? x[k] : lo;
+        hi = x[k] > hi ? x[k] : hi;
+    }
+    if (hi - lo <= 12) {
+        /* Neighbouring points (almost always): one window of 16 fine
+         * samples per grid, the lanes picked from it by a permutation. */
+        v4si x4;
+        memcpy(&x4, x, sizeof x4);
+        x4 -= lo;
+        /* widened in two steps: in one, GCC 12 went through the stack */
+        v8si x8 = __builtin_shufflevector(x4, x4, 0, 1, 2, 3, 4, 5, 6, 7);
+        v16si sel = __builtin_shufflevector(x8, x8, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3);
+        sel += (v16si){0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3};
+        for (int k = 0; k < 2 * n; k++) {
+            v16sf w;
+            memcpy(&w, fine[k] + lo, sizeof w);
+            F[k] = __builtin_shuffle(w, sel);
+        }
+    } else {
+        for (int k = 0; k < 2 * n; k++) LOAD_FOUR(F[k], fine[k], x);
+    }
+    for (int m = 0; m < n; m++) {
+        ADD_TO(sum[2 * m], A * F[2 * m] + C * F[2 * m + 1]);
+        ADD_TO(sum[2 * m + 1], A * F[2 * m + 1] - C * F[2 * m]);
+    }
+}
+
+/* Other tap counts (not the estimator's): the same lanes in a plain loop. */
+#define DEFINE_INTERP_FOUR(W)                                                              \
+    static inline void interp_four_##W(int n, const float *restrict t_,                    \
+                                       const float *restrict g_, const int32_t *x_,        \
+                                       const float *const *fine_, float *const *sum_)      \
+    {                                                                                      \
+        for (int m = 0; m < 4 * W; m++) {                                                  \
+            int k_ = m / W, j_ = m % W;                                                    \
+            float a_ = t_[m] * g_[2 * k_], c_ = t_[m] * g_[2 * k_ + 1];                    \
+            for (int e = 0; e < n; e++) {                                                  \
+                float fr_ = fine_[2 * e][x_[k_] + j_], fi_ = fine_[2 * e + 1][x_[k_] + j_]; \
+                sum_[2 * e][m] += a_ * fr_ + c_ * fi_;                                     \
+                sum_[2 * e + 1][m] += a_ * fi_ - c_ * fr_;                                 \
+            }                                                                              \
+        }                                                                                  \
+    }
+DEFINE_INTERP_FOUR(8)
+DEFINE_INTERP_FOUR(12)
+DEFINE_INTERP_FOUR(16)
+
 #define INTERP_PAIR(W, ar, ai)                                                             \
     do {                                                                                   \
         const float *restrict t_ = op->taps + q * W;                                       \
@@ -294,8 +402,18 @@ static void store_point(sasnav_cfloat *rho, int n, float sr, float si, int accum
         for (int i = 0; i < count; i++)                                                    \
             for (int j = 0; j < W; j++) acc_r[i][j] = acc_i[i][j] = 0.0f;                  \
         for (int l = 0; l < op->n_rx; l++) {                                               \
-            for (int i = 0; i < count; i++) {                                              \
-                size_t q = ((size_t)b * (size_t)op->n_rx + (size_t)l) * BLOCK + (size_t)i; \
+            size_t q0 = ((size_t)b * (size_t)op->n_rx + (size_t)l) * BLOCK;                \
+            const float *fine_[2] = {op->adj_re + (size_t)l * stride,                      \
+                                     op->adj_im + (size_t)l * stride};                     \
+            int i = 0;                                                                     \
+            for (; i + 4 <= count; i += 4) {                                               \
+                float *sum_[2] = {&acc_r[i][0], &acc_i[i][0]};                             \
+                interp_four_##W(1, op->taps + (q0 + (size_t)i) * W,                        \
+                                op->green + 2 * (q0 + (size_t)i), op->index + q0 + (size_t)i, \
+                                fine_, sum_);                                              \
+            }                                                                              \
+            for (; i < count; i++) {                                                       \
+                size_t q = q0 + (size_t)i;                                                 \
                 INTERP_PAIR(W, acc_r[i], acc_i[i]);                                        \
             }                                                                              \
         }                                                                                  \
@@ -414,121 +532,6 @@ DEFINE_INTERP(16)
         run0->first = run1->first = first;                                                 \
     }
 
-/* Four consecutive points of one channel into both images' sums at once
- * (interp2_W): lanes (point, tap), 4 W of them, each with the operations of
- * the one-point loop below in the same order, so the same bits. For W = 4
- * in 16-float vectors (GCC's vector extensions: one AVX-512 register per
- * sum where the target has them, two or four narrower ones elsewhere), the
- * four points' fine samples loaded 4 at a time and put side by side.
- * Branch-free: a first version that took only four points of one run (one
- * kernel index, one load) and branched otherwise was no faster (the
- * branch follows the runs' irregular ends); this one makes `sasnav pair
- * --threads 1` 1.06x faster (docs/estimator.md, "The adjoint's loop
- * order"). */
-typedef float v16sf __attribute__((vector_size(64)));
-typedef float v8sf __attribute__((vector_size(32)));
-typedef float v4sf __attribute__((vector_size(16)));
-
-/* v = the 4 floats at p + x[0], then at p + x[1], p + x[2], p + x[3]. */
-#define LOAD_FOUR(v, p, x)                                                                 \
-    do {                                                                                   \
-        v4sf f0_, f1_, f2_, f3_;                                                           \
-        memcpy(&f0_, (p) + (x)[0], sizeof f0_);                                            \
-        memcpy(&f1_, (p) + (x)[1], sizeof f1_);                                            \
-        memcpy(&f2_, (p) + (x)[2], sizeof f2_);                                            \
-        memcpy(&f3_, (p) + (x)[3], sizeof f3_);                                            \
-        v8sf lo_ = __builtin_shufflevector(f0_, f1_, 0, 1, 2, 3, 4, 5, 6, 7);              \
-        v8sf hi_ = __builtin_shufflevector(f2_, f3_, 0, 1, 2, 3, 4, 5, 6, 7);              \
-        (v) = __builtin_shufflevector(lo_, hi_, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12,  \
-                                      13, 14, 15);                                         \
-    } while (0)
-
-#define ADD_TO(p, d)                                                                       \
-    do {                                                                                   \
-        v16sf s_;                                                                          \
-        memcpy(&s_, (p), sizeof s_);                                                       \
-        s_ += (d);                                                                         \
-        memcpy((p), &s_, sizeof s_);                                                       \
-    } while (0)
-
-typedef int32_t v16si __attribute__((vector_size(64)));
-typedef int32_t v8si __attribute__((vector_size(32)));
-typedef int32_t v4si __attribute__((vector_size(16)));
-
-/* The fine grids end with READ_PAD floats of padding (fine_grids): the
- * window of 16 floats read at the smallest of four indices stays inside. */
-#define READ_PAD 16
-
-static inline __attribute__((always_inline)) void
-interp2_four_4(const float *restrict t, const float *restrict g, const int32_t *x,
-               const float *const *fine, float *restrict ar, float *restrict ai,
-               float *restrict br, float *restrict bi)
-{
-    v8sf g8;
-    v16sf T, FR, FI, HR, HI;
-    memcpy(&g8, g, sizeof g8); /* (re, im) of G for the four points */
-    memcpy(&T, t, sizeof T);
-    v16sf GR = __builtin_shufflevector(g8, g8, 0, 0, 0, 0, 2, 2, 2, 2, 4, 4, 4, 4, 6, 6, 6, 6);
-    v16sf GI = __builtin_shufflevector(g8, g8, 1, 1, 1, 1, 3, 3, 3, 3, 5, 5, 5, 5, 7, 7, 7, 7);
-    v16sf A = T * GR, C = T * GI;
-    int32_t lo = x[0], hi = x[0];
-    for (int k = 1; k < 4; k++) {
-        lo = x[k] < lo ? x[k] : lo;
-        hi = x[k] > hi ? x[k] : hi;
-    }
-    if (hi - lo <= 12) {
-        /* Neighbouring points (almost always): one window of 16 fine
-         * samples per grid, the lanes picked from it. */
-        v4si x4;
-        memcpy(&x4, x, sizeof x4);
-        x4 -= lo;
-        /* widened in two steps: in one, GCC 12 went through the stack */
-        v8si x8 = __builtin_shufflevector(x4, x4, 0, 1, 2, 3, 4, 5, 6, 7);
-        v16si sel = __builtin_shufflevector(x8, x8, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3);
-        sel += (v16si){0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3};
-        v16sf w0, w1, w2, w3;
-        memcpy(&w0, fine[0] + lo, sizeof w0);
-        memcpy(&w1, fine[1] + lo, sizeof w1);
-        memcpy(&w2, fine[2] + lo, sizeof w2);
-        memcpy(&w3, fine[3] + lo, sizeof w3);
-        FR = __builtin_shuffle(w0, sel);
-        FI = __builtin_shuffle(w1, sel);
-        HR = __builtin_shuffle(w2, sel);
-        HI = __builtin_shuffle(w3, sel);
-    } else {
-        LOAD_FOUR(FR, fine[0], x);
-        LOAD_FOUR(FI, fine[1], x);
-        LOAD_FOUR(HR, fine[2], x);
-        LOAD_FOUR(HI, fine[3], x);
-    }
-    ADD_TO(ar, A * FR + C * FI);
-    ADD_TO(ai, A * FI - C * FR);
-    ADD_TO(br, A * HR + C * HI);
-    ADD_TO(bi, A * HI - C * HR);
-}
-
-/* Other tap counts (not the estimator's): the same lanes in a plain loop. */
-#define DEFINE_INTERP2_FOUR(W)                                                             \
-    static inline void interp2_four_##W(const float *restrict t_, const float *restrict g_, \
-                                        const int32_t *x_, const float *const *fine_,      \
-                                        float *restrict ar_, float *restrict ai_,          \
-                                        float *restrict br_, float *restrict bi_)          \
-    {                                                                                      \
-        for (int m = 0; m < 4 * W; m++) {                                                  \
-            int k_ = m / W, j_ = m % W;                                                    \
-            float a_ = t_[m] * g_[2 * k_], c_ = t_[m] * g_[2 * k_ + 1];                    \
-            float fr_ = fine_[0][x_[k_] + j_], fi_ = fine_[1][x_[k_] + j_];                \
-            float hr_ = fine_[2][x_[k_] + j_], hi_ = fine_[3][x_[k_] + j_];                \
-            ar_[m] += a_ * fr_ + c_ * fi_;                                                 \
-            ai_[m] += a_ * fi_ - c_ * fr_;                                                 \
-            br_[m] += a_ * hr_ + c_ * hi_;                                                 \
-            bi_[m] += a_ * hi_ - c_ * hr_;                                                 \
-        }                                                                                  \
-    }
-DEFINE_INTERP2_FOUR(8)
-DEFINE_INTERP2_FOUR(12)
-DEFINE_INTERP2_FOUR(16)
-
 #define DEFINE_INTERP2(W)                                                                  \
     HOT_LOOP static void interp2_##W(const sasnav_op *op, int b, sasnav_cfloat *rho0,      \
                                      sasnav_cfloat *rho1)                                  \
@@ -546,10 +549,12 @@ DEFINE_INTERP2_FOUR(16)
                                      op->adj2_re + (size_t)l * stride,                     \
                                      op->adj2_im + (size_t)l * stride};                    \
             int i = 0;                                                                     \
-            for (; i + 4 <= count; i += 4)                                                 \
-                interp2_four_##W(op->taps + (q0 + (size_t)i) * W, op->green + 2 * (q0 + (size_t)i), \
-                                 op->index + q0 + (size_t)i, fine_, &a_r[i][0], &a_i[i][0], \
-                                 &b_r[i][0], &b_i[i][0]);                                  \
+            for (; i + 4 <= count; i += 4) {                                               \
+                float *sum_[4] = {&a_r[i][0], &a_i[i][0], &b_r[i][0], &b_i[i][0]};         \
+                interp_four_##W(2, op->taps + (q0 + (size_t)i) * W,                        \
+                                op->green + 2 * (q0 + (size_t)i), op->index + q0 + (size_t)i, \
+                                fine_, sum_);                                              \
+            }                                                                              \
             for (; i < count; i++) {                                                       \
                 size_t q = q0 + (size_t)i;                                                 \
                 const float *restrict t_ = op->taps + q * W;                               \
