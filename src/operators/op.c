@@ -251,15 +251,12 @@ static void store_point(sasnav_cfloat *rho, int n, float sr, float si, int accum
 /* Four consecutive points of one channel into the sums of n = 1 or 2 images
  * at once (interp_stream_W, interp2_W): lanes (point, tap), 4 W of them,
  * each with the operations of the one-point loops in the same order, so the
- * same bits. For W = 4
- * in 16-float vectors (GCC's vector extensions: one AVX-512 register per
- * sum where the target has them, two or four narrower ones elsewhere), the
- * four points' fine samples loaded 4 at a time and put side by side.
- * Branch-free: a first version that took only four points of one run (one
- * kernel index, one load) and branched otherwise was no faster (the
- * branch follows the runs' irregular ends); this one makes `sasnav pair
- * --threads 1` 1.06x faster (docs/estimator.md, "The adjoint's loop
- * order"). */
+ * same bits. For W = 4 in 16-float vectors (GCC's vector extensions: one
+ * AVX-512 register per sum where the target has them, two or four narrower
+ * ones elsewhere); the four points' fine samples come from one 16-sample
+ * window per grid and a permutation. `sasnav pair --threads 1` 1.10x
+ * faster than one point at a time; what was tried beside it:
+ * docs/estimator.md, "Four points at a time in the interpolation". */
 typedef float v16sf __attribute__((vector_size(64)));
 typedef float v8sf __attribute__((vector_size(32)));
 typedef float v4sf __attribute__((vector_size(16)));
@@ -756,7 +753,7 @@ static void free_point_storage(sasnav_op *op)
 }
 
 /* n floats of split fine grids and READ_PAD zeros after them (read, never
- * used, by interp2_four_4). */
+ * used, by interp_four_4's windows). */
 static float *fine_grids(size_t n)
 {
     float *f = fftwf_malloc((n + READ_PAD) * sizeof(float));
