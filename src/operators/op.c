@@ -291,6 +291,13 @@ typedef int32_t v4si __attribute__((vector_size(16)));
  * window of 16 floats read at the smallest of four indices stays inside. */
 #define READ_PAD 16
 
+#if defined(__clang__) || (defined(__GNUC__) && __GNUC__ >= 12)
+#define VECTOR_FOUR 1 /* __builtin_shufflevector: GCC 12, clang */
+#else
+#define VECTOR_FOUR 0
+#endif
+
+#if VECTOR_FOUR
 /* fine: the 2n split grids (re, im of each image) of the channel; sum: the
  * 2n sums (re, im of each image) of the four points, 4 W floats each. */
 static inline __attribute__((always_inline)) void
@@ -322,7 +329,11 @@ interp_four_4(int n, const float *restrict t, const float *restrict g, const int
         for (int k = 0; k < 2 * n; k++) {
             v16sf w;
             memcpy(&w, fine[k] + lo, sizeof w);
+#if defined(__clang__) /* no variable shuffle builtin: lane by lane (the fuzz builds) */
+            for (int m = 0; m < 16; m++) F[k][m] = w[sel[m]];
+#else
             F[k] = __builtin_shuffle(w, sel);
+#endif
         }
     } else {
         for (int k = 0; k < 2 * n; k++) LOAD_FOUR(F[k], fine[k], x);
@@ -332,8 +343,10 @@ interp_four_4(int n, const float *restrict t, const float *restrict g, const int
         ADD_TO(sum[2 * m + 1], A * F[2 * m + 1] - C * F[2 * m]);
     }
 }
+#endif /* VECTOR_FOUR */
 
-/* Other tap counts (not the estimator's): the same lanes in a plain loop. */
+/* Other tap counts (not the estimator's), and W = 4 where the compiler has
+ * no __builtin_shufflevector: the same lanes in a plain loop. */
 #define DEFINE_INTERP_FOUR(W)                                                              \
     static inline void interp_four_##W(int n, const float *restrict t_,                    \
                                        const float *restrict g_, const int32_t *x_,        \
@@ -349,6 +362,9 @@ interp_four_4(int n, const float *restrict t, const float *restrict g, const int
             }                                                                              \
         }                                                                                  \
     }
+#if !VECTOR_FOUR
+DEFINE_INTERP_FOUR(4)
+#endif
 DEFINE_INTERP_FOUR(8)
 DEFINE_INTERP_FOUR(12)
 DEFINE_INTERP_FOUR(16)
