@@ -434,8 +434,10 @@ static void check_intervals(void)
  * project_chains), with two they run side by side (intersect_both); each
  * is the other's reference, to the last bit, at every level. Then whole
  * estimates: with two threads the stages evaluate two hypotheses at once,
- * one on a twin estimator (search.c, stage_residuals); the estimate, its
- * values and its counts are those of one thread. */
+ * one on a twin estimator (search.c, stage_residuals; pair.c, pair_batch),
+ * with three threads three (the model's ten points and the valley scan's
+ * unevenly over the workers); the estimate, its values and its counts are
+ * those of one thread. */
 static void check_chain_paths(void)
 {
     sasnav_pose truth = {-0.0345, 0.0217, 0.041};
@@ -458,21 +460,29 @@ static void check_chain_paths(void)
                   "level %d, point %d: one thread zeta %.17g eta %.17g overlap %.17g, two %.17g "
                   "%.17g %.17g", level, h, z1, e1, o1, z2, e2, o2);
         }
-    if (one && two) {
-        sasnav_pair_result r1, r2;
+    po.nthreads = 3;
+    sasnav_pair *three = make_pair_opts(run, &po);
+    if (one && two && three) {
+        sasnav_pair_result r1, rn[2];
         CHECK_OK(sasnav_pair_estimate(one, &r1));
-        CHECK_OK(sasnav_pair_estimate(two, &r2));
-        CHECK(r1.error.x == r2.error.x && r1.error.y == r2.error.y && r1.error.theta == r2.error.theta &&
-                  r1.eta == r2.eta && r1.zeta == r2.zeta,
-              "estimates differ: one thread (%.9g, %.9g, %.9g) eta %.17g, two (%.9g, %.9g, %.9g) eta %.17g",
-              r1.error.x, r1.error.y, r1.error.theta, r1.eta, r2.error.x, r2.error.y, r2.error.theta,
-              r2.eta);
-        CHECK(r1.evaluations == r2.evaluations && r1.applications == r2.applications,
-              "counts differ: %d / %ld evaluations / applications against %d / %ld", r1.evaluations,
-              r1.applications, r2.evaluations, r2.applications);
+        CHECK_OK(sasnav_pair_estimate(two, &rn[0]));
+        CHECK_OK(sasnav_pair_estimate(three, &rn[1]));
+        for (int m = 0; m < 2; m++) {
+            const sasnav_pair_result *r2 = &rn[m];
+            CHECK(r1.error.x == r2->error.x && r1.error.y == r2->error.y &&
+                      r1.error.theta == r2->error.theta && r1.eta == r2->eta && r1.zeta == r2->zeta,
+                  "estimates differ: one thread (%.9g, %.9g, %.9g) eta %.17g, %d threads (%.9g, %.9g, "
+                  "%.9g) eta %.17g",
+                  r1.error.x, r1.error.y, r1.error.theta, r1.eta, m + 2, r2->error.x, r2->error.y,
+                  r2->error.theta, r2->eta);
+            CHECK(r1.evaluations == r2->evaluations && r1.applications == r2->applications,
+                  "counts differ: %d / %ld evaluations / applications against %d / %ld (%d threads)",
+                  r1.evaluations, r1.applications, r2->evaluations, r2->applications, m + 2);
+        }
     }
     sasnav_pair_destroy(one);
     sasnav_pair_destroy(two);
+    sasnav_pair_destroy(three);
     sasnav_run_free(run);
 }
 

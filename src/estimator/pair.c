@@ -354,10 +354,17 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
     return SASNAV_OK;
 }
 
+static void drop_twins(sasnav_pair *pr)
+{
+    for (int t = 0; t < pr->n_twins; t++) sasnav_pair_destroy(pr->twin[t]);
+    pr->n_twins = 0;
+    pr->twin_failed = 0;
+}
+
 void sasnav_pair_destroy(sasnav_pair *pr)
 {
     if (!pr) return;
-    sasnav_pair_destroy(pr->twin);
+    drop_twins(pr);
     for (int v = 0; v < PAIR_LEVELS; v++) level_free(&pr->level[v]);
     free(pr->data_p);
     free(pr->data_q);
@@ -413,9 +420,7 @@ static int take_data(sasnav_pair *pr, const sasnav_cfloat *data_p, const sasnav_
 static int make_levels(sasnav_pair *pr)
 {
     int rc = SASNAV_OK;
-    sasnav_pair_destroy(pr->twin); /* of the previous data */
-    pr->twin = NULL;
-    pr->twin_failed = 0;
+    drop_twins(pr); /* of the previous data */
     double xc = 0.5 * pr->nominal.x;
     for (int v = 0; v < PAIR_LEVELS && !rc; v++)
         rc = level_make_ops(pr, &pr->level[v], xc, v == 2 ? &pr->level[1] : NULL);
@@ -1071,12 +1076,9 @@ int pair_image_shift(sasnav_pair *pr, int level, sasnav_pose error, double *sx, 
 
 size_t pair_level_points(const sasnav_pair *pr, int level) { return pr->level[level].np; }
 
-sasnav_pair *pair_twin(sasnav_pair *pr)
+/* A twin of pr (one thread, the same data and geometry), or NULL. */
+static sasnav_pair *make_twin(sasnav_pair *pr)
 {
-    if (!pr || !pr->ready || pr->opts.gpu || omp_in_parallel()) return NULL;
-    int threads = pr->opts.nthreads > 0 ? pr->opts.nthreads : omp_get_max_threads();
-    if (threads < 2 || pr->twin_failed) return NULL;
-    if (pr->twin) return pr->twin;
     sasnav_pair_opts o = pr->opts;
     o.nthreads = 1;
     sasnav_pair *tw = NULL;
@@ -1094,24 +1096,85 @@ sasnav_pair *pair_twin(sasnav_pair *pr)
     }
     if (!rc) tw->pc_spacing = pr->pc_spacing;
     if (rc) {
-        /* no twin: the caller evaluates one hypothesis at a time */
         sasnav_pair_destroy(tw);
-        pr->twin_failed = 1;
         return NULL;
     }
     tw->applications = 0;
     tw->evaluations = 0;
-    pr->twin = tw;
     return tw;
+}
+
+int pair_workers(sasnav_pair *pr, int want, sasnav_pair **w)
+{
+    w[0] = pr;
+    if (!pr || !pr->ready || omp_in_parallel()) return 1;
+    int threads = pr->opts.nthreads > 0 ? pr->opts.nthreads : omp_get_max_threads();
+    int n = want < threads ? want : threads;
+    if (n > PAIR_MAX_WORKERS) n = PAIR_MAX_WORKERS;
+    while (pr->n_twins < n - 1 && !pr->twin_failed) {
+        sasnav_pair *tw = make_twin(pr);
+        if (!tw) {
+            /* no more twins: the workers made so far do the work */
+            pr->twin_failed = 1;
+            break;
+        }
+        pr->twin[pr->n_twins++] = tw;
+    }
+    if (n > 1 + pr->n_twins) n = 1 + pr->n_twins;
+    if (n < 1) n = 1;
+    for (int t = 1; t < n; t++) w[t] = pr->twin[t - 1];
+    return n;
 }
 
 void pair_twin_merge(sasnav_pair *pr)
 {
-    if (!pr || !pr->twin) return;
-    pr->applications += pr->twin->applications;
-    pr->evaluations += pr->twin->evaluations;
-    pr->twin->applications = 0;
-    pr->twin->evaluations = 0;
+    if (!pr) return;
+    for (int t = 0; t < pr->n_twins; t++) {
+        sasnav_pair *tw = pr->twin[t];
+        pr->applications += tw->applications;
+        pr->evaluations += tw->evaluations;
+        tw->applications = 0;
+        tw->evaluations = 0;
+    }
+}
+
+int pair_batch(sasnav_pair *pr, int n, int (*fn)(sasnav_pair *w, int j, void *ctx), void *ctx)
+{
+    if (n <= 0) return SASNAV_OK;
+    sasnav_pair *w[PAIR_MAX_WORKERS];
+    int nw = pair_workers(pr, n, w);
+    if (nw == 1) {
+        for (int j = 0; j < n; j++) {
+            int rc = fn(pr, j, ctx);
+            if (rc) return rc;
+        }
+        return SASNAV_OK;
+    }
+    /* each worker's first failing item, its code and message */
+    int fail_j[PAIR_MAX_WORKERS], fail_rc[PAIR_MAX_WORKERS];
+    char msg[PAIR_MAX_WORKERS][512];
+    /* one iteration per worker: a worker is never used by two threads */
+#pragma omp parallel for schedule(static, 1) num_threads(nw)
+    for (int t = 0; t < nw; t++) {
+        fail_j[t] = -1;
+        fail_rc[t] = SASNAV_OK;
+        msg[t][0] = 0;
+        for (int j = t; j < n; j += nw) {
+            int rc = fn(w[t], j, ctx);
+            if (rc) {
+                fail_j[t] = j;
+                fail_rc[t] = rc;
+                snprintf(msg[t], sizeof msg[t], "%s", sasnav_last_error());
+                break;
+            }
+        }
+    }
+    pair_twin_merge(pr);
+    int worst = -1;
+    for (int t = 0; t < nw; t++)
+        if (fail_rc[t] && (worst < 0 || fail_j[t] < fail_j[worst])) worst = t;
+    if (worst >= 0) return sasnav_set_error(fail_rc[worst], "%s", msg[worst]);
+    return SASNAV_OK;
 }
 
 int pair_eval_residual(sasnav_pair *pr, sasnav_pose error, int level, int use_eta,

@@ -11,6 +11,9 @@
 
 #define PAIR_LEVELS 3
 #define PAIR_KEPT 4 /* evaluations whose values a level keeps */
+/* Most estimators evaluating hypotheses at once (pair_workers): the final
+ * stage's model has ten points. */
+#define PAIR_MAX_WORKERS 10
 
 typedef struct {
     int k, i;
@@ -71,11 +74,12 @@ struct sasnav_pair {
     pair_level level[PAIR_LEVELS];
     long applications;
     int evaluations;
-    /* A second estimator on the same data and geometry, one thread, for
-     * evaluating two hypotheses at once (pair_twin); NULL until needed,
-     * dropped with new data. twin_failed: it could not be made. */
-    struct sasnav_pair *twin;
-    int twin_failed;
+    /* More estimators on the same data and geometry, one thread each, for
+     * evaluating hypotheses at once (pair_workers); made when first
+     * needed, dropped with new data. twin_failed: one could not be made
+     * (no more are tried for this data). */
+    struct sasnav_pair *twin[PAIR_MAX_WORKERS - 1];
+    int n_twins, twin_failed;
 };
 
 /* Scale (m) of the Gaussian high-pass applied to the moduli before their
@@ -100,15 +104,23 @@ int pair_eval_residual(sasnav_pair *pr, sasnav_pose error, int level, int use_et
                        sasnav_cfloat *r, double *f);
 size_t pair_level_points(const sasnav_pair *pr, int level);
 
-/* The estimator's twin (made at the first call): the same data, geometry
- * and options but one thread, whose evaluations are the same bits as the
- * estimator's own. NULL where it would not help or cannot be had: one
- * thread (opts.nthreads), inside a parallel region (navigate's one pair
- * per thread), the GPU path, or no memory. Each of the two objects may
- * then evaluate on its own thread, never both on one object at once. */
-sasnav_pair *pair_twin(sasnav_pair *pr);
-/* Adds the twin's evaluations and operator applications since the last
+/* The estimators that may evaluate hypotheses at once: w[0] = pr and up
+ * to want - 1 twins (the same data, geometry and options but one thread,
+ * made at the first call that needs them and dropped with new data), whose
+ * evaluations are the same bits as the estimator's own; on the GPU path
+ * each twin has device contexts of its own. Returns how many (at least
+ * 1): at most want, the estimator's threads (opts.nthreads, or all) and
+ * PAIR_MAX_WORKERS; 1 inside a parallel region (navigate's one pair per
+ * thread) or where no twin can be had (no memory, no device memory). */
+int pair_workers(sasnav_pair *pr, int want, sasnav_pair **w);
+/* Adds the twins' evaluations and operator applications since the last
  * call to the estimator's own counts. */
 void pair_twin_merge(sasnav_pair *pr);
+/* fn(worker, j, ctx) for j = 0 .. n - 1, item j on worker j % W of
+ * pair_workers(pr, n) (each worker on a thread of its own, its items in
+ * order; fn must write only item j's outputs). The counts merged after.
+ * Returns the error of the lowest item that failed (with its message);
+ * a worker stops at its first error, the others go on. */
+int pair_batch(sasnav_pair *pr, int n, int (*fn)(sasnav_pair *w, int j, void *ctx), void *ctx);
 
 #endif

@@ -18,7 +18,6 @@
 
 #include <math.h>
 #include <nlopt.h>
-#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -170,40 +169,31 @@ static int stage_residual(stage_ctx *c, const double *u, sasnav_cfloat *r, doubl
     return pair_eval_residual(c->pr, from_unit(c, u), c->level, c->use_eta, r, f);
 }
 
-/* Residuals at n unit points (n evaluations counted). With the
- * estimator's twin (pair_twin: two threads or more) two at a time, point j
- * on the estimator (even j) or its twin (odd j), each on its own thread
- * and with both projection chains through one operator (pair.c,
- * project_chains); every residual is the same bits either way. */
+/* Residuals at n unit points (n evaluations counted), as many at once as
+ * the estimator has workers (pair_batch: point j on the estimator or one
+ * of its one-thread twins, each on its own thread and with both projection
+ * chains through one operator, pair.c project_chains; on the GPU path on
+ * its own device contexts); every residual is the same bits either way. */
+typedef struct {
+    stage_ctx *c;
+    const double (*u)[3];
+    sasnav_cfloat *const *r;
+    double *f;
+} residuals_job;
+
+static int residual_item(sasnav_pair *w, int j, void *ctx)
+{
+    residuals_job *b = ctx;
+    return pair_eval_residual(w, from_unit(b->c, b->u[j]), b->c->level, b->c->use_eta, b->r[j],
+                              &b->f[j]);
+}
+
 static int stage_residuals(stage_ctx *c, int n, const double (*u)[3], sasnav_cfloat *const *r,
                            double *f)
 {
     c->evals += n;
-    sasnav_pair *twin = n > 1 ? pair_twin(c->pr) : NULL;
-    if (!twin) {
-        for (int j = 0; j < n; j++) {
-            int rc = pair_eval_residual(c->pr, from_unit(c, u[j]), c->level, c->use_eta, r[j], &f[j]);
-            if (rc) return rc;
-        }
-        return SASNAV_OK;
-    }
-    int rc[2] = {SASNAV_OK, SASNAV_OK};
-    char msg[2][512] = {"", ""};
-#pragma omp parallel num_threads(2)
-    {
-        int t = omp_get_thread_num(), nt = omp_get_num_threads();
-        for (int j = t; j < n; j += nt) {
-            int s = j % 2;
-            if (rc[s]) continue;
-            rc[s] = pair_eval_residual(s ? twin : c->pr, from_unit(c, u[j]), c->level, c->use_eta,
-                                       r[j], &f[j]);
-            if (rc[s]) snprintf(msg[s], sizeof msg[s], "%s", sasnav_last_error());
-        }
-    }
-    pair_twin_merge(c->pr);
-    for (int s = 0; s < 2; s++)
-        if (rc[s]) return sasnav_set_error(rc[s], "%s", msg[s]);
-    return SASNAV_OK;
+    residuals_job b = {c, u, r, f};
+    return pair_batch(c->pr, n, residual_item, &b);
 }
 
 /* The trial point of lm_stage becomes (dnew, unew) with residual *r1 and
@@ -615,6 +605,20 @@ typedef struct {
     double zeta, score;
 } scan_min;
 
+/* The valley scan's zeta at es[at[j]] into zs[at[j]] (pair_batch). */
+typedef struct {
+    const sasnav_pose *es;
+    double *zs;
+    int *at, n;
+} scan_job;
+
+static int scan_item(sasnav_pair *w, int j, void *ctx)
+{
+    scan_job *b = ctx;
+    int k = b->at[j];
+    return sasnav_pair_eval(w, b->es[k], SCAN_LEVEL, 0, &b->zs[k], NULL, NULL);
+}
+
 static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, int *evals,
                         double *ambiguity, scan_min *mins, int *n_mins)
 {
@@ -697,16 +701,29 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
         }
         zs[it + nt] = HUGE_VAL;
         es[it + nt] = e;
-        if (fabs(e.x - c.x) > b.x || fabs(e.y - c.y) > b.y) continue;
-        double z;
-        if ((rc = sasnav_pair_eval(pr, e, SCAN_LEVEL, 0, &z, NULL, NULL))) {
-            free(zs);
-            free(es);
-            return rc;
-        }
-        n++;
-        zs[it + nt] = z;
+        if (fabs(e.x - c.x) > b.x || fabs(e.y - c.y) > b.y) zs[it + nt] = -1; /* not scanned */
     }
+    /* zeta at the scan's points in the box, as many at once as the
+     * estimator has workers (the same values either way) */
+    scan_job job = {es, zs, NULL, 0};
+    job.at = malloc(sizeof(int) * (size_t)ns);
+    if (!job.at) {
+        free(zs);
+        free(es);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the valley scan");
+    }
+    for (int j = 0; j < ns; j++) {
+        if (zs[j] < 0) zs[j] = HUGE_VAL;
+        else job.at[job.n++] = j;
+    }
+    rc = pair_batch(pr, job.n, scan_item, &job);
+    free(job.at);
+    if (rc) {
+        free(zs);
+        free(es);
+        return rc;
+    }
+    n += job.n;
     /* The candidates are the local minima of the scan's zeta weighted by
      * the priors: 1 + (yaw offset / yaw_sigma)^2 and 1 + (surge offset /
      * surge_sigma)^2 (each where given). The ratio of the two lowest minima
