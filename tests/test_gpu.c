@@ -15,7 +15,11 @@
  *    T, T^H within 1e-5 of the CPU operator's. Without a device this part
  *    says so and is not run (the CI machines have none).
  * 4. Where a device is present: an estimator's kept device contexts give a
- *    second pair the bits a fresh estimator gives it. */
+ *    second pair the bits a fresh estimator gives it.
+ * 5. Where a device is present: a whole estimate with three threads is one
+ *    thread's, to the bit, counts included (the host's parts run on the
+ *    threads; the GPU path evaluates one hypothesis at a time: pair.c,
+ *    pair_workers). */
 #include "sasnav/error.h"
 #include "sasnav/estimator.h"
 #include "sasnav/geometry.h"
@@ -299,6 +303,44 @@ done:
 }
 #endif
 
+#ifdef SASNAV_HAVE_CUDA
+static void test_workers(void)
+{
+    if (gpu_check_device() == SASNAV_ERR_UNSUPPORTED) return;
+    sasnav_scenario sc;
+    sasnav_pair_opts po;
+    sasnav_run *run = simulate_preset("paper-pair", 0, &sc, &po);
+    if (!run) return;
+    sasnav_pose nominal = sasnav_ping_displacement(&run->nav[0], &run->nav[1]);
+    po.gpu = 1;
+    sasnav_pair_result r[2];
+    int ok = 1;
+    for (int e = 0; e < 2; e++) {
+        sasnav_pair *est = NULL;
+        po.nthreads = e == 0 ? 1 : 3;
+        CHECK_OK(sasnav_pair_create(&run->sys, &run->array, &run->win, &po, &est));
+        if (est) CHECK_OK(sasnav_pair_set_data(est, sasnav_run_ping(run, 0), sasnav_run_ping(run, 1), nominal));
+        if (est) CHECK_OK(sasnav_pair_estimate(est, &r[e]));
+        ok &= est != NULL;
+        sasnav_pair_destroy(est);
+    }
+    if (ok) {
+        CHECK(r[0].error.x == r[1].error.x && r[0].error.y == r[1].error.y &&
+                  r[0].error.theta == r[1].error.theta && r[0].eta == r[1].eta && r[0].zeta == r[1].zeta,
+              "GPU estimate, 1 / 3 threads: surge %.9g / %.9g, sway %.9g / %.9g, yaw %.9g / %.9g, eta "
+              "%.9g / %.9g",
+              r[0].error.x, r[1].error.x, r[0].error.y, r[1].error.y, r[0].error.theta, r[1].error.theta,
+              r[0].eta, r[1].eta);
+        CHECK(r[0].evaluations == r[1].evaluations && r[0].applications == r[1].applications,
+              "GPU estimate, 1 / 3 threads: %d / %d evaluations, %ld / %ld applications", r[0].evaluations,
+              r[1].evaluations, r[0].applications, r[1].applications);
+        printf("GPU: estimate with 1 / 3 threads: %.3f / %.3f s, surge error %+.4f mm\n", r[0].seconds,
+               r[1].seconds, 1e3 * (r[0].error.x - sc.traj.pair_error.x));
+    }
+    sasnav_run_free(run);
+}
+#endif
+
 int main(void)
 {
     test_view();
@@ -306,6 +348,7 @@ int main(void)
 #ifdef SASNAV_HAVE_CUDA
     test_evaluations();
     test_context_reuse();
+    test_workers();
 #endif
     return test_summary("test_gpu");
 }

@@ -107,11 +107,11 @@ size_t pair_level_points(const sasnav_pair *pr, int level);
 /* The estimators that may evaluate hypotheses at once: w[0] = pr and up
  * to want - 1 twins (the same data, geometry and options but one thread,
  * made at the first call that needs them and dropped with new data), whose
- * evaluations are the same bits as the estimator's own; on the GPU path
- * each twin has device contexts of its own. Returns how many (at least
- * 1): at most want, the estimator's threads (opts.nthreads, or all) and
- * PAIR_MAX_WORKERS; 1 inside a parallel region (navigate's one pair per
- * thread) or where no twin can be had (no memory, no device memory). */
+ * evaluations are the same bits as the estimator's own. Returns how many
+ * (at least 1): at most want, the estimator's threads (opts.nthreads, or
+ * all) and PAIR_MAX_WORKERS; 1 on the GPU path, inside a parallel region
+ * (navigate's one pair per thread) or where no twin can be had (no
+ * memory). */
 int pair_workers(sasnav_pair *pr, int want, sasnav_pair **w);
 /* Adds the twins' evaluations and operator applications since the last
  * call to the estimator's own counts. */

@@ -172,8 +172,8 @@ static int stage_residual(stage_ctx *c, const double *u, sasnav_cfloat *r, doubl
 /* Residuals at n unit points (n evaluations counted), as many at once as
  * the estimator has workers (pair_batch: point j on the estimator or one
  * of its one-thread twins, each on its own thread and with both projection
- * chains through one operator, pair.c project_chains; on the GPU path on
- * its own device contexts); every residual is the same bits either way. */
+ * chains through one operator, pair.c project_chains); every residual is
+ * the same bits either way. */
 typedef struct {
     stage_ctx *c;
     const double (*u)[3];
