@@ -1116,14 +1116,17 @@ int pair_workers(sasnav_pair *pr, int want, sasnav_pair **w)
     int threads = pr->opts.nthreads > 0 ? pr->opts.nthreads : omp_get_max_threads();
     int n = want < threads ? want : threads;
     if (n > PAIR_MAX_WORKERS) n = PAIR_MAX_WORKERS;
-    while (pr->n_twins < n - 1 && !pr->twin_failed) {
-        sasnav_pair *tw = make_twin(pr);
-        if (!tw) {
-            /* no more twins: the workers made so far do the work */
-            pr->twin_failed = 1;
-            break;
+    int need = pr->twin_failed ? 0 : n - 1 - pr->n_twins;
+    if (need > 0) {
+        /* made side by side (each ~25 ms on the paper pair: its operators
+         * and p's reconstructions; FFTW's planner is serialised in op.c) */
+        sasnav_pair *made[PAIR_MAX_WORKERS];
+#pragma omp parallel for schedule(static, 1) num_threads(need)
+        for (int t = 0; t < need; t++) made[t] = make_twin(pr);
+        for (int t = 0; t < need; t++) {
+            if (made[t]) pr->twin[pr->n_twins++] = made[t];
+            else pr->twin_failed = 1; /* the workers made do the work */
         }
-        pr->twin[pr->n_twins++] = tw;
     }
     if (n > 1 + pr->n_twins) n = 1 + pr->n_twins;
     if (n < 1) n = 1;
