@@ -224,7 +224,8 @@ static int level_make_ops(sasnav_pair *pr, pair_level *lv, double xcentre, pair_
         lv->window[j] = u <= 0 ? 1.0f : u >= taper ? 0.0f : (float)(0.5 + 0.5 * cos(M_PI * u / taper));
     }
     sasnav_op_opts oo = pr->opts.op;
-    oo.nthreads = pr->opts.nthreads;
+    oo.nthreads = pr->opts.nthreads > 0 ? pr->opts.nthreads : omp_get_max_threads();
+    if (oo.nthreads > PAIR_OP_THREADS_MAX) oo.nthreads = PAIR_OP_THREADS_MAX;
     int rc = sasnav_op_create(&pr->sys, &pr->array, &pr->win, (int)lv->np, x, y, &oo, &lv->op_p);
     if (!rc) rc = sasnav_op_create(&pr->sys, &pr->array, &pr->win, (int)lv->np, x, y, &oo, &lv->op_q);
     free(x);

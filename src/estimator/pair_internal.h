@@ -14,6 +14,12 @@
 /* Most estimators evaluating hypotheses at once (pair_workers): the final
  * stage's model has ten points. */
 #define PAIR_MAX_WORKERS 10
+/* Most threads of one operator application: beyond four the applications
+ * (16 channels of a 129 x 129 grid) get slower, not faster (measured on a
+ * 16-core host: the paper pair 6.0-6.6 s with 16, 2.9-3.5 s with 4;
+ * docs/estimator.md, "Batches on as many workers as threads"). The
+ * workers still use every thread. */
+#define PAIR_OP_THREADS_MAX 4
 
 typedef struct {
     int k, i;
