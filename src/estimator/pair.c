@@ -1111,7 +1111,7 @@ int pair_workers(sasnav_pair *pr, int want, sasnav_pair **w)
     /* Not on the GPU path: each twin there needs device contexts of its
      * own (cuFFT plans, buffers, captured graphs), and for one pair they
      * cost more than the concurrent evaluations save (measured on an H200:
-     * the paper pair 1.2x slower with two workers, 2.7x with ten;
+     * the paper pair 1.1x slower with two workers, 2.8x with ten;
      * docs/estimator.md, "Batches on as many workers as threads"). */
     if (!pr || !pr->ready || pr->opts.gpu || omp_in_parallel()) return 1;
     int threads = pr->opts.nthreads > 0 ? pr->opts.nthreads : omp_get_max_threads();

@@ -16,7 +16,8 @@
 #define PAIR_MAX_WORKERS 10
 /* Most threads of one operator application: beyond four the applications
  * (16 channels of a 129 x 129 grid) get slower, not faster (measured on a
- * 16-core host: the paper pair 6.0-6.6 s with 16, 2.9-3.5 s with 4;
+ * 16-core host, `--threads 16`: the paper pair 6.0-8.2 s with sixteen
+ * threads in the operators, 2.9-3.5 s with four;
  * docs/estimator.md, "Batches on as many workers as threads"). The
  * workers still use every thread. */
 #define PAIR_OP_THREADS_MAX 4
