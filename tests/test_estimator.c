@@ -5,6 +5,7 @@
 #include "sasnav/error.h"
 #include "sasnav/estimator.h"
 #include "sasnav/sim.h"
+#include "estimator/pair_internal.h"
 #include "testutil.h"
 
 #include <math.h>
@@ -429,15 +430,56 @@ static void check_intervals(void)
     sasnav_run_free(run);
 }
 
-/* The two ways of computing an evaluation's projection chains: with one
- * thread both chains go through each operator at once (pair.c,
- * project_chains), with two they run side by side (intersect_both); each
- * is the other's reference, to the last bit, at every level. Then whole
- * estimates: with two threads the stages evaluate two hypotheses at once,
- * one on a twin estimator (search.c, stage_residuals; pair.c, pair_batch),
- * with three threads three (the model's ten points and the valley scan's
- * unevenly over the workers); the estimate, its values and its counts are
- * those of one thread. */
+/* The evaluation's projection chains (pair.c, project_chains: both chains
+ * through each operator at once, each application shared by a team of the
+ * operators' threads) against a slow reference computed here from the
+ * plain operator functions, one chain after the other: rho_q = T_q^+ d_q,
+ * psi_p = (Q_p Q_q)^i rho_p, psi_q = (Q_q Q_p)^i rho_q with Q x = T^+ T x
+ * (sasnav_op_forward, sasnav_cgls), then the error window; to the last
+ * bit, for the estimator's level-`level` evaluation just made. */
+static void check_chain_reference(sasnav_pair *pr, int level, const char *what)
+{
+    pair_level *lv = &pr->level[level];
+    size_t np = lv->np, nd = pr->nd;
+    sasnav_cfloat *x = malloc(sizeof(sasnav_cfloat) * np), *y = malloc(sizeof(sasnav_cfloat) * np);
+    sasnav_cfloat *rq = malloc(sizeof(sasnav_cfloat) * np), *d = malloc(sizeof(sasnav_cfloat) * nd);
+    if (!x || !y || !rq || !d) {
+        CHECK(0, "out of memory");
+        goto done;
+    }
+    sasnav_cgls_opts co = {lv->k, pr->opts.tikhonov};
+    CHECK_OK(sasnav_cgls(lv->op_q, pr->data_q, &co, rq, NULL));
+    CHECK(!memcmp(rq, lv->rho_q, sizeof(sasnav_cfloat) * np), "%s, level %d: rho_q differs", what, level);
+    for (int c = 0; c < 2; c++) {
+        memcpy(x, c == 0 ? lv->rho_p : rq, sizeof(sasnav_cfloat) * np);
+        for (int s = 0; s < 2 * lv->i; s++) {
+            /* psi_p's chain applies Q_q first, psi_q's Q_p */
+            sasnav_op *op = (s % 2 == 0) == (c == 0) ? lv->op_q : lv->op_p;
+            CHECK_OK(sasnav_op_forward(op, x, d));
+            CHECK_OK(sasnav_cgls(op, d, &co, y, NULL));
+            memcpy(x, y, sizeof(sasnav_cfloat) * np);
+        }
+        for (size_t j = 0; j < np; j++) x[j] *= lv->window[j];
+        CHECK(!memcmp(x, c == 0 ? lv->psi_p : lv->psi_q, sizeof(sasnav_cfloat) * np),
+              "%s, level %d: psi_%c differs from the chain computed one step at a time", what, level,
+              c == 0 ? 'p' : 'q');
+    }
+done:
+    free(x);
+    free(y);
+    free(rq);
+    free(d);
+}
+
+/* Evaluations with one to four threads (one thread: both chains through
+ * each operator at once; two or three: the chains side by side, one thread
+ * each; four: a team of four sharing each application) are the plain
+ * chains' bits (check_chain_reference) at every level. Then whole
+ * estimates: with two or more threads the stages
+ * evaluate as many hypotheses at once (search.c, stage_residuals; pair.c,
+ * pair_batch: the model's ten points and the valley scan's unevenly over
+ * three workers); the estimate, its values and its counts are those of
+ * one thread. */
 static void check_chain_paths(void)
 {
     sasnav_pose truth = {-0.0345, 0.0217, 0.041};
@@ -450,18 +492,27 @@ static void check_chain_paths(void)
     sasnav_pair *one = make_pair_opts(run, &po);
     po.nthreads = 2;
     sasnav_pair *two = make_pair_opts(run, &po);
-    const sasnav_pose at[2] = {{-0.030, 0.021, 0.040}, {-0.0345, 0.0219, 0.0405}};
-    for (int level = 0; one && two && level < 3; level++)
-        for (int h = 0; h < 2; h++) {
-            double z1, e1, o1, z2, e2, o2;
-            CHECK_OK(sasnav_pair_eval(one, at[h], level, 0, &z1, &e1, &o1));
-            CHECK_OK(sasnav_pair_eval(two, at[h], level, 0, &z2, &e2, &o2));
-            CHECK(z1 == z2 && e1 == e2 && o1 == o2,
-                  "level %d, point %d: one thread zeta %.17g eta %.17g overlap %.17g, two %.17g "
-                  "%.17g %.17g", level, h, z1, e1, o1, z2, e2, o2);
-        }
     po.nthreads = 3;
     sasnav_pair *three = make_pair_opts(run, &po);
+    po.nthreads = 4;
+    sasnav_pair *four = make_pair_opts(run, &po);
+    sasnav_pair *est[4] = {one, two, three, four};
+    const sasnav_pose at[2] = {{-0.030, 0.021, 0.040}, {-0.0345, 0.0219, 0.0405}};
+    for (int level = 0; one && two && three && four && level < 3; level++)
+        for (int h = 0; h < 2; h++) {
+            double z[4], e[4], o[4];
+            for (int m = 0; m < 4; m++) {
+                char what[64];
+                snprintf(what, sizeof what, "%d thread(s), point %d", m + 1, h);
+                CHECK_OK(sasnav_pair_eval(est[m], at[h], level, 0, &z[m], &e[m], &o[m]));
+                check_chain_reference(est[m], level, what);
+            }
+            for (int m = 1; m < 4; m++)
+                CHECK(z[0] == z[m] && e[0] == e[m] && o[0] == o[m],
+                      "level %d, point %d: one thread zeta %.17g eta %.17g overlap %.17g, %d threads "
+                      "%.17g %.17g %.17g", level, h, z[0], e[0], o[0], m + 1, z[m], e[m], o[m]);
+        }
+    sasnav_pair_destroy(four);
     if (one && two && three) {
         sasnav_pair_result r1, rn[2];
         CHECK_OK(sasnav_pair_estimate(one, &r1));

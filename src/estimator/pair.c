@@ -655,13 +655,16 @@ static int project(const sasnav_pair *pr, const pair_level *lv, sasnav_op *op,
 }
 
 /* psi_p <- (Q_p Q_q)^i psi_p and psi_q <- (Q_q Q_p)^i psi_q by alternating
- * projections. The two chains are independent and, step by step, use
- * different operators (psi_p's applies Q_q while psi_q's applies Q_p, then
- * the other way round), so with two threads they run side by side in
- * lockstep, each operator used by one thread at a time (its applications
- * then run on that thread alone, nested parallelism being off): the
- * operators' own parallel loops scale worse than two independent chains
- * (about 1.2x against 1.9x on two cores, docs/estimator.md). Each chain
+ * projections, for two or three threads. The two chains are independent
+ * and, step by step, use different operators (psi_p's applies Q_q while
+ * psi_q's applies Q_p, then the other way round), so they run side by side
+ * in lockstep, one thread each, each operator used by one thread at a time
+ * (its applications then run on that thread alone, nested parallelism
+ * being off). The threads meet once per projection step: on a busy machine
+ * this holds up far better than sharing every application between them
+ * (project_chains with a team), which is 1.10x faster on an idle two-core
+ * machine but 1.4-2x slower with another such estimate running
+ * (docs/estimator.md, "One evaluation on a team of threads"). Each chain
  * computes exactly what it computes alone, so the bits do not depend on
  * the thread count. */
 static int intersect_both(sasnav_pair *pr, pair_level *lv, sasnav_op *op_p, sasnav_op *op_q)
@@ -669,12 +672,7 @@ static int intersect_both(sasnav_pair *pr, pair_level *lv, sasnav_op *op_p, sasn
     int steps = 2 * lv->i;
     int rc[2] = {SASNAV_OK, SASNAV_OK};
     char msg[2][512] = {"", ""};
-    /* With four threads or more the operators' loops keep them all busy
-     * (two chains of one thread each would leave the rest idle, nested
-     * parallelism being off): side by side on two or three only. */
-    int threads = pr->opts.nthreads > 0 ? pr->opts.nthreads : omp_get_max_threads();
-    int team = threads == 2 || threads == 3 ? 2 : 1;
-#pragma omp parallel num_threads(team)
+#pragma omp parallel num_threads(2)
     {
         int nt = omp_get_num_threads(), t = omp_get_thread_num();
         for (int s = 0; s < steps; s++) {
@@ -713,12 +711,15 @@ static int intersect_both(sasnav_pair *pr, pair_level *lv, sasnav_op *op_p, sasn
  *
  * A chain's step j reads rho (j = 0), psi (even j) or tmp (odd j) and
  * writes tmp (even j) or psi (odd j). Every result is the bits of the
- * chains computed one after the other (intersect_both). Used where the
- * operators have one thread (navigate's estimators, `pair --threads 1`):
- * the team functions could share the applications between threads too,
- * but at one barrier or more per application that was measured slower on
- * a shared two-core machine than the chains side by side
- * (docs/estimator.md). */
+ * chains computed one after the other with sasnav_op_forward and
+ * sasnav_cgls (op_team.h), whatever the team. The team: one thread (one
+ * thread in all, or inside another parallel region: navigate's one pair
+ * per thread, pair_batch's one hypothesis per worker), or the operators'
+ * threads when they are four (PAIR_OP_THREADS_MAX), sharing each
+ * application: 1.3-1.5x faster than the chains one after the other with
+ * the operators' own parallel loops, the path before, on a 16-core host
+ * (docs/estimator.md, "One evaluation on a team of threads"). Two or three
+ * threads run intersect_both instead. */
 static int project_chains(sasnav_pair *pr, pair_level *lv)
 {
     sasnav_op *op_p = lv->op_p, *op_q = lv->op_q;
@@ -731,10 +732,14 @@ static int project_chains(sasnav_pair *pr, pair_level *lv)
     sasnav_cfloat *rho[2] = {lv->rho_p, lv->rho_q}, *psi[2] = {lv->psi_p, lv->psi_q};
     sasnav_cfloat *tmp[2] = {lv->tmp, lv->tmp2}, *dt[2] = {lv->data_tmp, lv->data_tmp2};
     sasnav_cfloat *work[2] = {lv->cgls_work, lv->cgls_work2};
-    /* A region of its own (one thread): the team functions then see a team
-     * of one whatever region the caller runs in (navigate runs one pair per
-     * thread, stage_residuals one hypothesis per thread). */
-#pragma omp parallel num_threads(1)
+    /* A region of its own: the team functions see this team whatever
+     * region the caller runs in (a region of one inside another). */
+    int team = 1;
+    if (!omp_in_parallel()) {
+        team = op_threads(op_p) < op_threads(op_q) ? op_threads(op_p) : op_threads(op_q);
+        if (team < 4) team = 1;
+    }
+#pragma omp parallel num_threads(team)
     {
         /* step 0: T_q rho_p, then T_q^+ of it beside rho_q = T_q^+ d_q */
         const sasnav_cfloat *in[2] = {lv->rho_p, NULL};
@@ -892,13 +897,15 @@ int sasnav_pair_eval(sasnav_pair *pr, sasnav_pose error, int level, int blurred,
     {
         rc = place_q(pr, level, error);
         if (rc) return rc;
-        if ((op_threads(lv->op_q) == 1 && op_threads(lv->op_p) == 1) || omp_in_parallel()) {
-            /* one thread (or a thread of the caller's team, as beside a
-             * twin): both chains through each operator at once */
+        int th = op_threads(lv->op_q) < op_threads(lv->op_p) ? op_threads(lv->op_q) : op_threads(lv->op_p);
+        if (th == 1 || th >= 4 || omp_in_parallel()) {
+            /* both chains through each operator at once: on one thread (or
+             * a thread of the caller's team, as beside a twin), or shared
+             * by a team of four */
             rc = project_chains(pr, lv);
             if (rc) return rc;
         } else {
-            /* two or more: the chains side by side (intersect_both) */
+            /* two or three: the chains side by side (intersect_both) */
             sasnav_cgls_opts co = {lv->k, pr->opts.tikhonov};
             rc = sasnav_cgls(lv->op_q, pr->data_q, &co, lv->rho_q, lv->cgls_work);
             pr->applications += cgls_cost(lv->k);

@@ -815,8 +815,9 @@ static int enqueue_eval(gpu_ctx *g, int k, int i, double tikhonov)
     CK(cudaMemcpyAsync(w1->psi, g->rho_q, np * sizeof(float2), cudaMemcpyDeviceToDevice, w0->st));
     CK(cudaEventRecord(g->ev, w0->st));
     CK(cudaStreamWaitEvent(w1->st, g->ev, 0));
-    /* chain 0: psi_p, first Q_q; chain 1: psi_q, first Q_p (pair.c's
-     * intersect_both); issued step by step so that both streams have work. */
+    /* chain 0: psi_p, first Q_q; chain 1: psi_q, first Q_p (the chains of
+     * pair.c's project_chains); issued step by step so that both streams
+     * have work. */
     for (int s = 0; s < 2 * i; s++) {
         for (int c = 0; c < 2; c++) {
             chain_ws *w = &g->ws[c];
