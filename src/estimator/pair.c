@@ -712,15 +712,16 @@ static int intersect_both(sasnav_pair *pr, pair_level *lv, sasnav_op *op_p, sasn
  * A chain's step j reads rho (j = 0), psi (even j) or tmp (odd j) and
  * writes tmp (even j) or psi (odd j). Every result is the bits of the
  * chains computed one after the other with sasnav_op_forward and
- * sasnav_cgls (op_team.h), whatever the team. The team: one thread (one
- * thread in all, or inside another parallel region: navigate's one pair
+ * sasnav_cgls (op_team.h), whatever the team. The team (chosen by
+ * sasnav_pair_eval): one thread (one thread in all, or inside another
+ * parallel region: navigate's one pair
  * per thread, pair_batch's one hypothesis per worker), or the operators'
  * threads when they are four (PAIR_OP_THREADS_MAX), sharing each
  * application: 1.3-1.5x faster than the chains one after the other with
  * the operators' own parallel loops, the path before, on a 16-core host
  * (docs/estimator.md, "One evaluation on a team of threads"). Two or three
  * threads run intersect_both instead. */
-static int project_chains(sasnav_pair *pr, pair_level *lv)
+static int project_chains(sasnav_pair *pr, pair_level *lv, int team)
 {
     sasnav_op *op_p = lv->op_p, *op_q = lv->op_q;
     int rc = op_team_prepare(op_p);
@@ -734,11 +735,6 @@ static int project_chains(sasnav_pair *pr, pair_level *lv)
     sasnav_cfloat *work[2] = {lv->cgls_work, lv->cgls_work2};
     /* A region of its own: the team functions see this team whatever
      * region the caller runs in (a region of one inside another). */
-    int team = 1;
-    if (!omp_in_parallel()) {
-        team = op_threads(op_p) < op_threads(op_q) ? op_threads(op_p) : op_threads(op_q);
-        if (team < 4) team = 1;
-    }
 #pragma omp parallel num_threads(team)
     {
         /* step 0: T_q rho_p, then T_q^+ of it beside rho_q = T_q^+ d_q */
@@ -898,11 +894,12 @@ int sasnav_pair_eval(sasnav_pair *pr, sasnav_pose error, int level, int blurred,
         rc = place_q(pr, level, error);
         if (rc) return rc;
         int th = op_threads(lv->op_q) < op_threads(lv->op_p) ? op_threads(lv->op_q) : op_threads(lv->op_p);
-        if (th == 1 || th >= 4 || omp_in_parallel()) {
+        if (omp_in_parallel()) th = 1;
+        if (th == 1 || th >= 4) {
             /* both chains through each operator at once: on one thread (or
              * a thread of the caller's team, as beside a twin), or shared
              * by a team of four */
-            rc = project_chains(pr, lv);
+            rc = project_chains(pr, lv, th);
             if (rc) return rc;
         } else {
             /* two or three: the chains side by side (intersect_both) */
