@@ -685,9 +685,11 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     int ns = 2 * nt + 1;
     double *zs = malloc(sizeof(double) * (size_t)ns);
     sasnav_pose *es = malloc(sizeof(sasnav_pose) * (size_t)ns);
-    if (!zs || !es) {
+    scan_job job = {es, zs, malloc(sizeof(int) * (size_t)ns), 0};
+    if (!zs || !es || !job.at) {
         free(zs);
         free(es);
+        free(job.at);
         return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the valley scan");
     }
     for (int it = -nt; it <= nt; it++) {
@@ -701,21 +703,10 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
         }
         zs[it + nt] = HUGE_VAL;
         es[it + nt] = e;
-        if (fabs(e.x - c.x) > b.x || fabs(e.y - c.y) > b.y) zs[it + nt] = -1; /* not scanned */
+        if (!(fabs(e.x - c.x) > b.x || fabs(e.y - c.y) > b.y)) job.at[job.n++] = it + nt;
     }
     /* zeta at the scan's points in the box, as many at once as the
      * estimator has workers (the same values either way) */
-    scan_job job = {es, zs, NULL, 0};
-    job.at = malloc(sizeof(int) * (size_t)ns);
-    if (!job.at) {
-        free(zs);
-        free(es);
-        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the valley scan");
-    }
-    for (int j = 0; j < ns; j++) {
-        if (zs[j] < 0) zs[j] = HUGE_VAL;
-        else job.at[job.n++] = j;
-    }
     rc = pair_batch(pr, job.n, scan_item, &job);
     free(job.at);
     if (rc) {
