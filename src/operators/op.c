@@ -617,7 +617,7 @@ DEFINE_INTERP2(16)
  * `sasnav pair pair.h5`, 5-6 alternating runs: 1.05x with one thread, 1.04x
  * with two (docs/estimator.md, "Four channels side by side"). Tried beside
  * it: the four channels in the lanes of 16-float vectors (one operation per
- * four pairs) is 1.9x slower: the runs of four channels end at a quarter
+ * four pairs) is 1.6x slower: the runs of four channels end at a quarter
  * of the points, and every end costs a spill of the vectors. */
 static inline __attribute__((always_inline)) void
 spread_four_body(const sasnav_op *op, int n, int l, int b, const sasnav_cfloat *const *rho,
