@@ -995,6 +995,45 @@ static double pair_pc_spacing(const sasnav_pair *pr)
     return pr->array.n_rx > 1 ? fabs(pr->array.rx_u[1] - pr->array.rx_u[0]) / 2.0 : 0.025;
 }
 
+/* Candidates refined side by side (pair_batch): item j refines from
+ * start[j] into out[j], through the zeta and level-1 eta stages (refine)
+ * or the eta stage alone (refine_eta, the slip check's points). Each
+ * candidate's stages are the same on the estimator or on a twin (the same
+ * bits), so only the wall time depends on the workers. */
+typedef struct {
+    const sasnav_pose *start;
+    refine_out *out;
+    double pc_spacing;
+    int eta_only;
+} refine_job;
+
+static int refine_item(sasnav_pair *w, int j, void *ctx)
+{
+    refine_job *b = ctx;
+    return b->eta_only ? refine_eta(w, b->start[j], b->pc_spacing, &b->out[j])
+                       : refine(w, b->start[j], b->pc_spacing, &b->out[j]);
+}
+
+/* Runs the job's n items and, when they ran side by side, scales their
+ * stage times so that they add up to the batch's wall time (the result's
+ * per-stage seconds stay a split of the estimate's wall time). */
+static int refine_batch(sasnav_pair *pr, int n, refine_job *job)
+{
+    double t = sasnav_now_seconds();
+    int rc = pair_batch(pr, n, refine_item, job);
+    if (rc) return rc;
+    double wall = sasnav_now_seconds() - t, sum = 0;
+    for (int j = 0; j < n; j++) sum += job->out[j].seconds_zeta + job->out[j].seconds_eta;
+    if (sum > wall && sum > 0) {
+        double f = wall / sum;
+        for (int j = 0; j < n; j++) {
+            job->out[j].seconds_zeta *= f;
+            job->out[j].seconds_eta *= f;
+        }
+    }
+    return SASNAV_OK;
+}
+
 int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
 {
     if (!pr || !res) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
@@ -1049,17 +1088,30 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     memset(&sum, 0, sizeof sum);
     int win = -1;
     res->n_candidates = nm;
+    /* The candidates to refine, refined side by side (independent of one
+     * another), then taken in order. */
+    int refine_it[SASNAV_PAIR_MAX_CANDIDATES], ks[SASNAV_PAIR_MAX_CANDIDATES], nr = 0;
+    sasnav_pose starts[SASNAV_PAIR_MAX_CANDIDATES];
+    refine_out rr[SASNAV_PAIR_MAX_CANDIDATES];
+    for (int k = 0; k < nm; k++) {
+        refine_it[k] = k == 0 || k == 1 || (k < SASNAV_PAIR_REFINED_CANDIDATES &&
+                                            mins[0].score > AMBIGUOUS * mins[k].score);
+        if (refine_it[k]) {
+            ks[nr] = k;
+            starts[nr++] = k == 0 ? start : mins[k].e;
+        }
+    }
+    refine_job job = {starts, rr, pc_spacing, 0};
+    rc = refine_batch(pr, nr, &job);
+    if (rc) return rc;
+    for (int j = 0; j < nr; j++) r[ks[j]] = rr[j];
     for (int k = 0; k < nm; k++) {
         sasnav_pair_candidate *cd = &res->candidates[k];
         cd->error = mins[k].e;
         cd->zeta_scan = mins[k].zeta;
         cd->zeta = cd->eta = NAN;
         cd->same_as = -1;
-        int refine_it = k == 0 || k == 1 || (k < SASNAV_PAIR_REFINED_CANDIDATES &&
-                                             mins[0].score > AMBIGUOUS * mins[k].score);
-        if (!refine_it) continue;
-        rc = refine(pr, k == 0 ? start : mins[k].e, pc_spacing, &r[k]);
-        if (rc) return rc;
+        if (!refine_it[k]) continue;
         add_costs(&sum, &r[k]);
         cd->refined = 1;
         cd->error = r[k].error;
@@ -1085,16 +1137,35 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
     for (int round = 0; round < 2 && nc < SASNAV_PAIR_MAX_CANDIDATES; round++) {
         int moved = 0;
         sasnav_pose centre = r[win].error;
-        for (int sgn = -1; sgn <= 1 && nc < SASNAV_PAIR_MAX_CANDIDATES; sgn += 2) {
-            sasnav_pose st = {centre.x + sgn * slip.x, centre.y, centre.theta + sgn * slip.theta};
+        /* Both neighbours refined side by side, from the candidates known
+         * before the round; the second is then taken only if it is not at
+         * the first's result, as when they were refined in turn (two slips
+         * apart, the bounded stage cannot bring the first there). */
+        sasnav_pose st[2];
+        int todo[2], nt = 0;
+        for (int side = 0; side < 2; side++) {
+            int sgn = side == 0 ? -1 : 1;
+            st[side] = (sasnav_pose){centre.x + sgn * slip.x, centre.y, centre.theta + sgn * slip.theta};
             int known = 0;
             for (int j = 0; j < nc && !known; j++)
                 known = res->candidates[j].refined && res->candidates[j].same_as < 0 &&
-                        same_point(st, res->candidates[j].error, pc_spacing, o->range);
+                        same_point(st[side], res->candidates[j].error, pc_spacing, o->range);
+            todo[side] = !known && nc + nt < SASNAV_PAIR_MAX_CANDIDATES;
+            if (todo[side]) starts[nt++] = st[side];
+        }
+        refine_job sjob = {starts, rr, pc_spacing, 1};
+        rc = refine_batch(pr, nt, &sjob);
+        if (rc) return rc;
+        for (int side = 0, next = 0; side < 2 && nc < SASNAV_PAIR_MAX_CANDIDATES; side++) {
+            if (!todo[side]) continue;
+            const refine_out *got = &rr[next++];
+            int known = 0;
+            for (int c = 0; c < nc && !known; c++)
+                known = res->candidates[c].refined && res->candidates[c].same_as < 0 &&
+                        same_point(st[side], res->candidates[c].error, pc_spacing, o->range);
             if (known) continue;
             int k = nc++;
-            rc = refine_eta(pr, st, pc_spacing, &r[k]);
-            if (rc) return rc;
+            r[k] = *got;
             add_costs(&sum, &r[k]);
             sasnav_pair_candidate *cd = &res->candidates[k];
             *cd = (sasnav_pair_candidate){r[k].error, NAN, NAN, r[k].eta, 1, -1};
