@@ -619,6 +619,44 @@ static int scan_item(sasnav_pair *w, int j, void *ctx)
     return sasnav_pair_eval(w, b->es[k], SCAN_LEVEL, 0, &b->zs[k], NULL, NULL);
 }
 
+/* The global stage's shift at yaw hypothesis j (pair_batch): the shift
+ * at the hypothesis, then a second pass at its point of the valley, whose
+ * correlation peak is the hypothesis's score; ok[j] = 0 where a point
+ * falls outside the box. */
+typedef struct {
+    sasnav_pose c, box;
+    double ystep, zx, zy;
+    int ny_h;
+    sasnav_pose *v2;
+    double *peak;
+    int *ok;
+} shift_job;
+
+static int shift_item(sasnav_pair *w, int j, void *ctx)
+{
+    shift_job *b = ctx;
+    sasnav_pose c = b->c, box = b->box;
+    b->ok[j] = 0;
+    sasnav_pose h0 = {c.x, c.y, c.theta + (j - b->ny_h) * b->ystep};
+    double sx, sy, peak;
+    int rc = pair_image_shift(w, 0, h0, &sx, &sy, &peak);
+    if (rc) return rc;
+    sasnav_pose hd0 = {w->nominal.x + h0.x, w->nominal.y + h0.y, w->nominal.theta + h0.theta};
+    sasnav_pose v = valley_point(w, hd0, b->zx, b->zy, sx, sy, w->nominal.theta + h0.theta);
+    if (fabs(v.x - c.x) > box.x || fabs(v.y - c.y) > box.y) return SASNAV_OK;
+    /* The second pass at the valley point: there the two images align
+     * when the hypothesis's yaw is right, and their correlation is the
+     * hypothesis's score. */
+    if ((rc = pair_image_shift(w, 0, v, &sx, &sy, &peak))) return rc;
+    sasnav_pose hv = {w->nominal.x + v.x, w->nominal.y + v.y, w->nominal.theta + v.theta};
+    sasnav_pose v2 = valley_point(w, hv, b->zx, b->zy, sx, sy, w->nominal.theta + v.theta);
+    if (fabs(v2.x - c.x) > box.x || fabs(v2.y - c.y) > box.y) return SASNAV_OK;
+    b->v2[j] = v2;
+    b->peak[j] = peak;
+    b->ok[j] = 1;
+    return SASNAV_OK;
+}
+
 static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, int *evals,
                         double *ambiguity, scan_min *mins, int *n_mins)
 {
@@ -645,25 +683,27 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     if (ny_h > 50) ny_h = 50;
     double best_peak = -HUGE_VAL;
     sasnav_pose best_hyp = c;
-    for (int jh = -ny_h; jh <= ny_h; jh++) {
-        sasnav_pose h0 = {c.x, c.y, c.theta + jh * ystep};
-        double peak;
-        if ((rc = pair_image_shift(pr, 0, h0, &sx, &sy, &peak))) return rc;
-        sasnav_pose hd0 = {pr->nominal.x + h0.x, pr->nominal.y + h0.y, pr->nominal.theta + h0.theta};
-        sasnav_pose v = valley_point(pr, hd0, zx, zy, sx, sy, pr->nominal.theta + h0.theta);
-        if (fabs(v.x - c.x) > b.x || fabs(v.y - c.y) > b.y) continue;
-        /* The second pass at the valley point: there the two images align
-         * when the hypothesis's yaw is right, and their correlation is the
-         * hypothesis's score. */
-        if ((rc = pair_image_shift(pr, 0, v, &sx, &sy, &peak))) return rc;
-        sasnav_pose hv = {pr->nominal.x + v.x, pr->nominal.y + v.y, pr->nominal.theta + v.theta};
-        sasnav_pose v2 = valley_point(pr, hv, zx, zy, sx, sy, pr->nominal.theta + v.theta);
-        if (fabs(v2.x - c.x) > b.x || fabs(v2.y - c.y) > b.y) continue;
-        if (peak > best_peak) {
-            best_peak = peak;
-            best_hyp = v2;
-        }
+    /* The hypotheses are independent: measured side by side on the
+     * workers (pair_batch), then taken in order. */
+    int nh = 2 * ny_h + 1;
+    shift_job sj = {c, b, ystep, zx, zy, ny_h, malloc(sizeof(sasnav_pose) * (size_t)nh),
+                    malloc(sizeof(double) * (size_t)nh), malloc(sizeof(int) * (size_t)nh)};
+    if (!sj.v2 || !sj.peak || !sj.ok) {
+        free(sj.v2);
+        free(sj.peak);
+        free(sj.ok);
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the global stage");
     }
+    rc = pair_batch(pr, nh, shift_item, &sj);
+    for (int j = 0; j < nh && !rc; j++)
+        if (sj.ok[j] && sj.peak[j] > best_peak) {
+            best_peak = sj.peak[j];
+            best_hyp = sj.v2[j];
+        }
+    free(sj.v2);
+    free(sj.peak);
+    free(sj.ok);
+    if (rc) return rc;
     hyp = best_hyp;
     sasnav_pose hd = {pr->nominal.x + hyp.x, pr->nominal.y + hyp.y, pr->nominal.theta + hyp.theta};
     if ((rc = pair_image_shift(pr, 0, hyp, &sx, &sy, NULL))) return rc;
