@@ -24,14 +24,18 @@
  * by one thread at a time (sasnav_navigate runs one per thread over pairs);
  * the sasnav_system / array / window and data passed in may be shared
  * read-only. It uses opts.nthreads OpenMP threads (0 =
- * omp_get_max_threads() at create): both projection chains of an
- * evaluation go through each operator at once, each application shared by
- * up to four threads; with two or more the searches' batches of
- * hypotheses (the valley scan, LM Jacobians, the final model's ten points)
- * are evaluated as many at a time as there are threads (up to ten), on the
- * estimator and one-thread twins of it (made at the first batch, about
- * 22 MiB each on the paper pair; none inside another parallel region, nor
- * on the GPU path). Results do not depend on that number.
+ * omp_get_max_threads() at create): with one, both projection chains of
+ * an evaluation go through each operator at once; with two or three,
+ * single evaluations run the chains side by side, one thread each; with
+ * four or more, both chains through each operator, each application
+ * shared by four threads; with two or more the searches' batches of
+ * hypotheses (the global stage's image shifts and valley scan, LM
+ * Jacobians, the candidates' and slip points' local stages, the final
+ * model's ten points) are evaluated as many at a time as there are
+ * threads (up to ten), on the estimator and one-thread twins of it (made
+ * at the first batch, about 22 MiB each on the paper pair; none inside
+ * another parallel region, nor on the GPU path). Results do not depend on
+ * that number.
  * create, set_data (it rebuilds the operators) and destroy plan FFTW under
  * the planner lock of op.h.
  */

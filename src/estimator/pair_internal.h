@@ -46,7 +46,7 @@ typedef struct {
     int n_kept, next_kept;
     sasnav_cfloat *rho_p, *rho_q, *psi_p, *psi_q, *tmp, *data_tmp, *cgls_work;
     /* Second set of projection buffers: psi_q's chain runs beside psi_p's
-     * (pair.c, project_chains). */
+     * (pair.c, project_chains and intersect_both). */
     sasnav_cfloat *tmp2, *data_tmp2, *cgls_work2;
     double *mod_p, *mod_q, *blur_tmp;
     float *window;

@@ -968,6 +968,18 @@ static int same_point(sasnav_pose a, sasnav_pose b, double pc_spacing, double ra
            fabs(a.theta - b.theta) < 0.25 * pc_spacing / range;
 }
 
+/* The first of res's candidates 0 .. n-1 that is refined, distinct (not
+ * converged onto an earlier one) and at point p (same_point); -1 if none. */
+static int distinct_at(const sasnav_pair_result *res, int n, sasnav_pose p, double pc_spacing,
+                       double range)
+{
+    for (int j = 0; j < n; j++)
+        if (res->candidates[j].refined && res->candidates[j].same_as < 0 &&
+            same_point(p, res->candidates[j].error, pc_spacing, range))
+            return j;
+    return -1;
+}
+
 static void add_costs(refine_out *sum, const refine_out *r)
 {
     sum->seconds_zeta += r->seconds_zeta;
@@ -1157,12 +1169,7 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
         cd->error = r[k].error;
         cd->zeta = r[k].zeta;
         cd->eta = r[k].eta;
-        for (int j = 0; j < k; j++)
-            if (res->candidates[j].refined && res->candidates[j].same_as < 0 &&
-                same_point(cd->error, res->candidates[j].error, pc_spacing, o->range)) {
-                cd->same_as = j;
-                break;
-            }
+        cd->same_as = distinct_at(res, k, cd->error, pc_spacing, o->range);
         if (cd->same_as < 0 && (win < 0 || r[k].eta < r[win].eta)) win = k;
     }
     /* The slip check: the points one phase-centre slip either side of the
@@ -1186,10 +1193,7 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
         for (int side = 0; side < 2; side++) {
             int sgn = side == 0 ? -1 : 1;
             st[side] = (sasnav_pose){centre.x + sgn * slip.x, centre.y, centre.theta + sgn * slip.theta};
-            int known = 0;
-            for (int j = 0; j < nc && !known; j++)
-                known = res->candidates[j].refined && res->candidates[j].same_as < 0 &&
-                        same_point(st[side], res->candidates[j].error, pc_spacing, o->range);
+            int known = distinct_at(res, nc, st[side], pc_spacing, o->range) >= 0;
             todo[side] = !known && nc + nt < SASNAV_PAIR_MAX_CANDIDATES;
             if (todo[side]) starts[nt++] = st[side];
         }
@@ -1199,22 +1203,13 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
         for (int side = 0, next = 0; side < 2 && nc < SASNAV_PAIR_MAX_CANDIDATES; side++) {
             if (!todo[side]) continue;
             const refine_out *got = &rr[next++];
-            int known = 0;
-            for (int c = 0; c < nc && !known; c++)
-                known = res->candidates[c].refined && res->candidates[c].same_as < 0 &&
-                        same_point(st[side], res->candidates[c].error, pc_spacing, o->range);
-            if (known) continue;
+            if (distinct_at(res, nc, st[side], pc_spacing, o->range) >= 0) continue;
             int k = nc++;
             r[k] = *got;
             add_costs(&sum, &r[k]);
             sasnav_pair_candidate *cd = &res->candidates[k];
             *cd = (sasnav_pair_candidate){r[k].error, NAN, NAN, r[k].eta, 1, -1};
-            for (int j = 0; j < k; j++)
-                if (res->candidates[j].refined && res->candidates[j].same_as < 0 &&
-                    same_point(cd->error, res->candidates[j].error, pc_spacing, o->range)) {
-                    cd->same_as = j;
-                    break;
-                }
+            cd->same_as = distinct_at(res, k, cd->error, pc_spacing, o->range);
             if (cd->same_as < 0 && r[k].eta < r[win].eta) {
                 win = k;
                 moved = 1;
