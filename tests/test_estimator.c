@@ -478,8 +478,9 @@ done:
  * estimates: with two or more threads the stages
  * evaluate as many hypotheses at once (search.c, stage_residuals; pair.c,
  * pair_batch: the model's ten points and the valley scan's unevenly over
- * three workers); the estimate, its values and its counts are those of
- * one thread. */
+ * three workers, the global stage's image shifts, the candidates' and slip
+ * points' local stages); the estimate, its values and its counts are those
+ * of one thread. */
 static void check_chain_paths(void)
 {
     sasnav_pose truth = {-0.0345, 0.0217, 0.041};
