@@ -20,13 +20,28 @@ void sasnav_cgls_default_opts(sasnav_cgls_opts *opts)
     opts->tikhonov = 0.0;
 }
 
+/* ||v||^2 in double: the squares of the 2n floats summed in NORM_LANES
+ * interleaved partial sums (float j into sum j mod NORM_LANES), which are
+ * then added in order. The lanes are independent chains that vectorise;
+ * one sequential sum waited on each addition (4-6 % of an estimate's time).
+ * The order is fixed, whatever the target, so results are reproducible. */
+#define NORM_LANES 8
 static double norm2(const sasnav_cfloat *v, size_t n)
 {
-    double s = 0;
-    for (size_t i = 0; i < n; i++) {
-        double re = crealf(v[i]), im = cimagf(v[i]);
-        s += re * re + im * im;
+    const float *f = (const float *)v;
+    size_t m = 2 * n, full = m / NORM_LANES * NORM_LANES;
+    double lane[NORM_LANES] = {0};
+    for (size_t i = 0; i < full; i += NORM_LANES)
+        for (int j = 0; j < NORM_LANES; j++) {
+            double a = f[i + j];
+            lane[j] += a * a;
+        }
+    for (size_t i = full; i < m; i++) {
+        double a = f[i];
+        lane[i - full] += a * a;
     }
+    double s = 0;
+    for (int j = 0; j < NORM_LANES; j++) s += lane[j];
     return s;
 }
 
@@ -61,7 +76,8 @@ int sasnav_cgls(sasnav_op *op, const sasnav_cfloat *data, const sasnav_cgls_opts
     for (int it = 0; it < o.iterations && gamma > 1e-12 * gamma0; it++) {
         rc = sasnav_op_forward(op, p, q);
         if (rc) goto done;
-        double delta = norm2(q, nd) + o.tikhonov * norm2(p, np);
+        double delta = norm2(q, nd);
+        if (o.tikhonov > 0) delta += o.tikhonov * norm2(p, np);
         if (!(delta > 0)) break;
         float alpha = (float)(gamma / delta);
         for (size_t i = 0; i < np; i++) x[i] += alpha * p[i];
@@ -152,7 +168,8 @@ void cgls_team(const sasnav_op *op, int n, const sasnav_cfloat *const *data, int
         for (int k = 0; k < m; k++) {
             int c = which[k];
             sasnav_cfloat *p = P_(c), *q = Q_(c), *r = R_(c), *xc = x[c];
-            double delta = norm2(q, nd) + tikhonov * norm2(p, np);
+            double delta = norm2(q, nd);
+            if (tikhonov > 0) delta += tikhonov * norm2(p, np);
             if (!(delta > 0)) {
                 st[c].active = 0;
                 continue;
