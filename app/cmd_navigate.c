@@ -17,7 +17,7 @@
 static const char *help =
     "usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]\n"
     "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
-    "                       [--cross-extent M] [--range-extent M]\n"
+    "                       [--cross-extent M] [--range-extent M] [--eta-max E]\n"
     "                       [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]\n"
     "                       [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]\n"
     "                       [--threads N] [--gpu] [--json] [--checkpoint FILE]\n"
@@ -65,6 +65,8 @@ static const char *help =
     "                    without a gyro a longer grid tells yaw better on a\n"
     "                    seabed that fills the swath: 4 m, 3x smaller yaw\n"
     "                    errors for 2.5x the time; docs/estimator.md)\n"
+    "  --eta-max E       final eta above which a pair's verdict is 'failed'\n"
+    "                    (default 0.6; see 'sasnav pair --help')\n"
     "  --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)\n"
     "  --no-aiding       ignore the run's aiding measurements\n"
     "  --no-resolve      take each pair's own estimate (no joint resolution, no\n"
@@ -489,7 +491,7 @@ int cmd_navigate(int argc, char **argv)
         {"iterations", required_argument, 0, 'I'}, {"estimate-yaw", no_argument, 0, 'W'},
         {"interleave", required_argument, 0, 'G'}, {"closed", no_argument, 0, 'Z'},
         {"keep-length", no_argument, 0, 'K'}, {"align-heading", no_argument, 0, 'H'},
-        {"gpu", no_argument, 0, 'g'},
+        {"gpu", no_argument, 0, 'g'},        {"eta-max", required_argument, 0, 'e'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -504,7 +506,7 @@ int cmd_navigate(int argc, char **argv)
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         /* Options of the pair navigation alone (refused with --virtual-array). */
-        if (strchr("mLyfAFUNBSRMCg", opt)) n_general++;
+        if (strchr("mLyfAFUNBSRMCge", opt)) n_general++;
         have_cross |= opt == 'X';
         have_range |= opt == 'E';
         switch (opt) {
@@ -546,6 +548,11 @@ int cmd_navigate(int argc, char **argv)
         case 'y':
             if (cli_parse_double(optarg, &no.pair.yaw_sigma) || !(no.pair.yaw_sigma >= 0))
                 return cli_usage("navigate", "--yaw-sigma needs a standard deviation >= 0 (rad)");
+            break;
+        case 'e':
+            if (cli_parse_double(optarg, &no.pair.verdict_eta_max) ||
+                !(no.pair.verdict_eta_max > 0 && no.pair.verdict_eta_max <= 10))
+                return cli_usage("navigate", "--eta-max needs a bound in (0, 10]");
             break;
         case 'U':
             if (cli_parse_double(optarg, &no.pair.surge_sigma) || !(no.pair.surge_sigma >= 0))

@@ -116,4 +116,29 @@ grep -q "warning: pair 0-1 is ambiguous" "$T/pnav.err" ||
     fail "no warning for the ambiguous pair 0-1: $(cat "$T/pnav.err")"
 grep -q "pairs flagged" "$T/pnav.txt" || fail "the text summary lacks the flagged count"
 
+# --eta-max sets the bound of the "failed" verdict: the same pairs, with a
+# bound below any eta they can reach, are all failed (warned, counted); a
+# bound that is not a positive number is a usage error (2) that writes
+# nothing.
+"$CLI" navigate "$T/run.h5" --k 2 --i 1 --range-extent 0.6 --no-aiding --eta-max 0.001 --json \
+    -o "$T/nave.h5" > "$T/nave.json" 2> "$T/nave.err" || { cat "$T/nave.err" >&2; fail "navigate --eta-max"; }
+grep -q "warning: pair 0-1 is failed" "$T/nave.err" || fail "--eta-max 0.001: no failed warning: $(cat "$T/nave.err")"
+python3 - "$T/nave.json" "$T/nav0.json" <<'EOF' || fail "--eta-max verdicts"
+import json, sys
+low, default = (json.load(open(f)) for f in sys.argv[1:])
+assert all(p["first_status"] == "failed" for p in low["pairs"]), [p["first_status"] for p in low["pairs"]]
+assert low["flagged_pairs"] == len(low["pairs"]) == 2, low["flagged_pairs"]
+assert all(p["first_status"] == "ok" for p in default["pairs"]), [p["first_status"] for p in default["pairs"]]
+EOF
+for bad in 0 -1 nan x; do
+    "$CLI" pair "$T/run.h5" --eta-max "$bad" > /dev/null 2> "$T/e4"
+    rc=$?
+    [ "$rc" -eq 2 ] || fail "pair --eta-max $bad: exit $rc (usage errors exit 2)"
+    grep -q "eta-max" "$T/e4" || fail "pair --eta-max $bad: message does not name the option"
+    "$CLI" navigate "$T/run.h5" --eta-max "$bad" -o "$T/y.h5" > /dev/null 2>&1
+    rc=$?
+    [ "$rc" -eq 2 ] || fail "navigate --eta-max $bad: exit $rc"
+    [ -e "$T/y.h5" ] && fail "navigate --eta-max $bad wrote an output"
+done
+
 exit $FAILED
