@@ -2,7 +2,7 @@
 # The subspace pair estimator on a survey-class system (the `survey`
 # preset: 300 kHz, 60 kHz band, 32 receivers of 5 cm, range of interest
 # 70 m, 0.32 m ping spacing, true bistatic poses, smooth motion errors,
-# 30 dB; docs/config.md), seeds S0 .. S0 + N - 1: each seed is simulated
+# 30 dB or SNR; docs/config.md), seeds S0 .. S0 + N - 1: each seed is simulated
 # with three pings and pair (1, 2) is estimated with `sasnav pair --json`
 # and the extra options in PAIR_OPTS (e.g. "--cross-extent 2"). Prints one
 # line per seed and a summary: |error| median / 95th percentile / max in
@@ -13,7 +13,7 @@
 # the median wall time and operator applications (docs/estimator.md,
 # "A survey-class system").
 #
-# usage: [PAIR_OPTS="..."] [THREADS=2] sh bench/survey_pairs.sh path/to/sasnav [S0 N] [WORKDIR]
+# usage: [PAIR_OPTS="..."] [SNR=30] [THREADS=2] sh bench/survey_pairs.sh path/to/sasnav [S0 N] [WORKDIR]
 # (an existing WORKDIR keeps its simulated runs; the estimates are redone)
 set -eu
 CLI=${1:?usage: survey_pairs.sh path/to/sasnav [S0 N] [WORKDIR]}
@@ -22,19 +22,20 @@ N=${3:-10}
 DIR=${4:-$(mktemp -d)}
 PAIR_OPTS=${PAIR_OPTS:-}
 THREADS=${THREADS:-2}
+SNR=${SNR:-30}
 mkdir -p "$DIR"
 printf 'preset: survey\ntrajectory:\n  n_pings: 3\n' > "$DIR/survey3.yaml"
 TAG=$(printf '%s' "$PAIR_OPTS" | tr -c 'A-Za-z0-9.' '_')
 s=$S0
 while [ "$s" -lt $((S0 + N)) ]; do
-    [ -f "$DIR/run_$s.h5" ] || "$CLI" simulate --config "$DIR/survey3.yaml" --seed "$s" \
-        -o "$DIR/run_$s.h5" 2>/dev/null
+    [ -f "$DIR/run${SNR}_$s.h5" ] || "$CLI" simulate --config "$DIR/survey3.yaml" --seed "$s" \
+        --snr "$SNR" -o "$DIR/run${SNR}_$s.h5" 2>/dev/null
     # shellcheck disable=SC2086 # PAIR_OPTS is a list of options
-    "$CLI" pair "$DIR/run_$s.h5" --p 1 --q 2 --threads "$THREADS" --json $PAIR_OPTS \
-        > "$DIR/pair${TAG}_$s.json"
+    "$CLI" pair "$DIR/run${SNR}_$s.h5" --p 1 --q 2 --threads "$THREADS" --json $PAIR_OPTS \
+        > "$DIR/pair${SNR}${TAG}_$s.json"
     s=$((s + 1))
 done
-python3 - "$DIR" "$TAG" "$S0" "$N" <<'EOF'
+python3 - "$DIR" "$SNR$TAG" "$S0" "$N" <<'EOF'
 import json, sys
 d, tag, s0, n = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 SLIP_SURGE, SLIP_YAW = 0.00625, 0.8 * 0.025 / 70.0

@@ -23,8 +23,9 @@ void sasnav_cgls_default_opts(sasnav_cgls_opts *opts)
 /* ||v||^2 in double: the squares of the 2n floats summed in NORM_LANES
  * interleaved partial sums (float j into sum j mod NORM_LANES), which are
  * then added in order. The lanes are independent chains that vectorise;
- * one sequential sum waited on each addition (4-6 % of an estimate's time).
- * The order is fixed, whatever the target, so results are reproducible. */
+ * one sequential sum waited on each addition (about 2 % of an estimate's
+ * time, perf). The order is fixed whatever the target: results are
+ * reproducible. */
 #define NORM_LANES 8
 static double norm2(const sasnav_cfloat *v, size_t n)
 {
