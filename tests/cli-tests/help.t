@@ -101,7 +101,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   usage: sasnav pair run.h5 [--p I --q J] [--json] [--k K] [--i I]
                      [--prior S,W,Y] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]
                      [--cross-extent M] [--range-extent M]
-                     [--no-global] [--subintervals N]
+                     [--no-global] [--subintervals N] [--eta-max E]
                      [--range R] [--lag-model fixed|motion] [--threads N] [--gpu]
   
   Estimates the motion error (displacement minus nominal) of ping q relative
@@ -131,6 +131,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --lag-model M     Tx-array offset per sub-interval: 'fixed' (the run's
                       tx_lag, default) or 'motion' (speed x 2 R / c at the
                       sub-interval's centre range R)
+    --eta-max E       final eta above which the verdict is 'failed' (default
+                      0.6, calibrated at 10 m; correct survey-class pairs at
+                      70 m reach 0.6, slipped ones ~0.95: docs/estimator.md,
+                      "A survey-class system")
     --threads N       OpenMP threads
     --gpu             the error evaluations on a CUDA GPU (builds configured
                       with -DSASNAV_CUDA=ON; the same estimates to float
@@ -219,7 +223,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   $ sasnav navigate --help
   usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]
                          [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]
-                         [--cross-extent M] [--range-extent M]
+                         [--cross-extent M] [--range-extent M] [--eta-max E]
                          [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]
                          [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]
                          [--threads N] [--gpu] [--json] [--checkpoint FILE]
@@ -267,6 +271,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       without a gyro a longer grid tells yaw better on a
                       seabed that fills the swath: 4 m, 3x smaller yaw
                       errors for 2.5x the time; docs/estimator.md)
+    --eta-max E       final eta above which a pair's verdict is 'failed'
+                      (default 0.6; see 'sasnav pair --help')
     --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)
     --no-aiding       ignore the run's aiding measurements
     --no-resolve      take each pair's own estimate (no joint resolution, no
