@@ -1,17 +1,18 @@
 #!/bin/sh
 # The subspace pair estimator on a survey-class system (the `survey`
 # preset: 300 kHz, 60 kHz band, 32 receivers of 5 cm, range of interest
-# 70 m, 0.32 m ping spacing, true bistatic poses, smooth motion errors,
-# 30 dB or SNR; docs/config.md), seeds S0 .. S0 + N - 1: each seed is simulated
-# with three pings and pair (1, 2) is estimated with `sasnav pair --json`
+# 70 m, 0.32 m ping spacing, true bistatic poses, smooth motion errors;
+# docs/config.md) at SNR dB (default 30), seeds S0 .. S0 + N - 1: each seed
+# is simulated with three pings and pair (1, 2) is estimated with `sasnav
+# pair --json`
 # and the extra options in PAIR_OPTS (e.g. "--cross-extent 2"). Prints one
 # line per seed and a summary: |error| median / 95th percentile / max in
 # surge, sway and yaw, the verdicts, slips (off by more than a quarter
 # phase-centre spacing in surge, 6.25 mm, or in yaw by more than 0.8 of
-# a slip's d / R = 3.6e-4 rad, as bench_trust's 2e-3 rad is at 10 m),
-# unflagged slips (a slip with verdict "ok"), and
-# the median wall time and operator applications (docs/estimator.md,
-# "A survey-class system").
+# a slip's d / R = 3.6e-4 rad, as bench_trust's 2e-3 rad is at 10 m;
+# d = 2.5 cm and R = 70 m are the preset's), unflagged slips (a slip with
+# verdict "ok"), and the median wall time and operator applications
+# (docs/estimator.md, "A survey-class system").
 #
 # usage: [PAIR_OPTS="..."] [SNR=30] [THREADS=2] sh bench/survey_pairs.sh path/to/sasnav [S0 N] [WORKDIR]
 # (an existing WORKDIR keeps its simulated runs; the estimates are redone)
