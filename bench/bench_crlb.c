@@ -201,11 +201,12 @@ int main(int argc, char **argv)
         int in_q = j >= mp, jj = in_q ? j - mp : j;
         sasnav_cfloat *col = c0 + (size_t)j * m;
         e[jj] = 1.0f;
+        /* Column j of C0: A W A^H e_j, with e_j in p's samples or in q's. */
+        rc = sasnav_op_adjoint(in_q ? op_q[0] : op_p, e, u);
+        for (int n = 0; n < np; n++) u[n] *= w[n];
+        if (!rc) rc = sasnav_op_forward(op_p, u, col);
+        if (!rc) rc = sasnav_op_forward(op_q[0], u, col + mp);
         if (!in_q) {
-            rc = sasnav_op_adjoint(op_p, e, u);
-            for (int n = 0; n < np; n++) u[n] *= w[n];
-            if (!rc) rc = sasnav_op_forward(op_p, u, col);
-            if (!rc) rc = sasnav_op_forward(op_q[0], u, col + mp);
             for (int i = 0; i < 3 && !rc; i++) {
                 rc = sasnav_op_forward(op_q[1 + 2 * i], u, a);
                 if (!rc) rc = sasnav_op_forward(op_q[2 + 2 * i], u, b);
@@ -213,10 +214,6 @@ int main(int argc, char **argv)
                 for (int r = 0; r < mp; r++) d[r] = (a[r] - b[r]) / (float)(2.0 * h[i]);
             }
         } else {
-            rc = sasnav_op_adjoint(op_q[0], e, u);
-            for (int n = 0; n < np; n++) u[n] *= w[n];
-            if (!rc) rc = sasnav_op_forward(op_p, u, col);
-            if (!rc) rc = sasnav_op_forward(op_q[0], u, col + mp);
             for (int i = 0; i < 3 && !rc; i++) {
                 rc = sasnav_op_adjoint(op_q[1 + 2 * i], e, up);
                 if (!rc) rc = sasnav_op_adjoint(op_q[2 + 2 * i], e, um);
@@ -231,9 +228,9 @@ int main(int argc, char **argv)
             }
         }
         e[jj] = 0.0f;
-        if (j == 63)
-            fprintf(stderr, "bench_crlb: %d points, %d samples; about %.0f s to go\n", np, m,
-                    (omp_get_wtime() - t_start) / 64 * (m - 64) * (in_q ? 1.0 : 1.5));
+        if ((j + 1) % (m / 8) == 0)
+            fprintf(stderr, "bench_crlb: %d points, %d samples: %d columns in %.0f s\n", np, m, j + 1,
+                    omp_get_wtime() - t_start);
     }
     if (rc) {
         fprintf(stderr, "bench_crlb: %s\n", sasnav_last_error());
