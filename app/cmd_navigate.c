@@ -17,7 +17,7 @@
 static const char *help =
     "usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]\n"
     "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
-    "                       [--cross-extent M] [--range-extent M] [--eta-max E]\n"
+    "                       [--cross-extent M] [--range-extent M] [--eta-max E] [--final C]\n"
     "                       [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]\n"
     "                       [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]\n"
     "                       [--threads N] [--gpu] [--json] [--checkpoint FILE]\n"
@@ -67,6 +67,8 @@ static const char *help =
     "                    errors for 2.5x the time; docs/estimator.md)\n"
     "  --eta-max E       final eta above which a pair's verdict is 'failed'\n"
     "                    (default 0.6; see 'sasnav pair --help')\n"
+    "  --final C         each pair's final-stage criterion: auto (default), eta\n"
+    "                    or joint (see 'sasnav pair --help')\n"
     "  --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)\n"
     "  --no-aiding       ignore the run's aiding measurements\n"
     "  --no-resolve      take each pair's own estimate (no joint resolution, no\n"
@@ -261,6 +263,9 @@ static void print_json(const char *input, const sasnav_navigation *nav)
         json_object_set_new(o, "estimate", pose_json(np->result.error));
         json_object_set_new(o, "eta", real_or_null(np->result.eta));
         json_object_set_new(o, "margin", isfinite(np->result.margin) ? json_real(np->result.margin) : json_null());
+        if (np->result.verdict != SASNAV_VERDICT_UNCHECKED && np->result.evaluations > 0)
+            json_object_set_new(o, "final_criterion",
+                                json_string(sasnav_final_criterion_name(np->result.final_criterion)));
         json_object_set_new(o, "candidates", candidates_json(&np->result));
         if (nav->aiding_used) {
             json_object_set_new(o, "aiding", pose_json(np->aiding));
@@ -492,6 +497,7 @@ int cmd_navigate(int argc, char **argv)
         {"interleave", required_argument, 0, 'G'}, {"closed", no_argument, 0, 'Z'},
         {"keep-length", no_argument, 0, 'K'}, {"align-heading", no_argument, 0, 'H'},
         {"gpu", no_argument, 0, 'g'},        {"eta-max", required_argument, 0, 'e'},
+        {"final", required_argument, 0, 'c'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -548,6 +554,10 @@ int cmd_navigate(int argc, char **argv)
         case 'y':
             if (cli_parse_double(optarg, &no.pair.yaw_sigma) || !(no.pair.yaw_sigma >= 0))
                 return cli_usage("navigate", "--yaw-sigma needs a standard deviation >= 0 (rad)");
+            break;
+        case 'c':
+            no.pair.final_criterion = sasnav_final_criterion_parse(optarg);
+            if (no.pair.final_criterion < 0) return cli_usage("navigate", "--final needs auto, eta or joint");
             break;
         case 'e':
             if (cli_parse_double(optarg, &no.pair.verdict_eta_max) ||

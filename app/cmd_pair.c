@@ -15,7 +15,7 @@ static const char *help =
     "usage: sasnav pair run.h5 [--p I --q J] [--json] [--k K] [--i I]\n"
     "                   [--prior S,W,Y] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
     "                   [--cross-extent M] [--range-extent M]\n"
-    "                   [--no-global] [--subintervals N] [--eta-max E]\n"
+    "                   [--no-global] [--subintervals N] [--eta-max E] [--final C]\n"
     "                   [--range R] [--lag-model fixed|motion] [--threads N] [--gpu]\n"
     "\n"
     "Estimates the motion error (displacement minus nominal) of ping q relative\n"
@@ -45,6 +45,11 @@ static const char *help =
     "  --lag-model M     Tx-array offset per sub-interval: 'fixed' (the run's\n"
     "                    tx_lag, default) or 'motion' (speed x 2 R / c at the\n"
     "                    sub-interval's centre range R)\n"
+    "  --final C         the final stage's criterion: 'auto' (default: the joint\n"
+    "                    misfit when the pings' relative yaw is small, else\n"
+    "                    eta), 'eta' (the paper's) or 'joint' (one scene\n"
+    "                    explains both pings; docs/estimator.md, \"A\n"
+    "                    joint-misfit final stage\")\n"
     "  --eta-max E       final eta above which the verdict is 'failed' (default\n"
     "                    0.6, calibrated at 10 m; correct survey-class pairs at\n"
     "                    70 m reach 0.6, slipped ones ~0.95: docs/estimator.md,\n"
@@ -94,11 +99,13 @@ int cmd_pair(int argc, char **argv)
         {"cross-extent", required_argument, 0, 'X'}, {"surge-sigma", required_argument, 0, 'U'},
         {"range-extent", required_argument, 0, 'E'}, {"gpu", no_argument, 0, 'g'},
         {"eta-max", required_argument, 0, 'e'}, {"help", no_argument, 0, 'h'},
+        {"final", required_argument, 0, 'C'},
         {0, 0, 0, 0}};
     long p = 0, q = 1, k = 8, iters = 8, nsub = 1, threads = 0;
     int json = 0, no_global = 0, have_p = 0, have_q = 0, motion_lag = 0, fix_yaw = 0, gpu = 0;
     double prior[3] = {0, 0, 0}, range = NAN, box[3] = {NAN, NAN, NAN}, yaw_sigma = 0, cross_extent = 0,
            surge_sigma = 0, range_extent = 0, eta_max = 0;
+    int final_c = SASNAV_FINAL_AUTO;
     int opt;
     optind = 1;
     while ((opt = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
@@ -127,6 +134,10 @@ int cmd_pair(int argc, char **argv)
         case 'e':
             if (cli_parse_double(optarg, &eta_max) || !(eta_max > 0 && eta_max <= 10))
                 return cli_usage("pair", "--eta-max needs a bound in (0, 10]");
+            break;
+        case 'C':
+            final_c = sasnav_final_criterion_parse(optarg);
+            if (final_c < 0) return cli_usage("pair", "--final needs auto, eta or joint");
             break;
         case 'y':
             if (cli_parse_double(optarg, &yaw_sigma) || !(yaw_sigma >= 0))
@@ -194,6 +205,7 @@ int cmd_pair(int argc, char **argv)
     if (cross_extent > 0) po.cross_extent = cross_extent;
     if (range_extent > 0) po.range_extent = range_extent;
     if (eta_max > 0) po.verdict_eta_max = eta_max;
+    po.final_criterion = final_c;
     if (sasnav_pair_opts_check(&po)) {
         sasnav_run_free(run);
         free(out);
@@ -255,6 +267,7 @@ int cmd_pair(int argc, char **argv)
         json_object_set_new(root, "zeta_stage", pose_json(r0->zeta_stage));
         json_object_set_new(root, "zeta", json_real(r0->zeta));
         json_object_set_new(root, "eta", json_real(r0->eta));
+        json_object_set_new(root, "final_criterion", json_string(sasnav_final_criterion_name(r0->final_criterion)));
         json_object_set_new(root, "overlap", json_real(r0->overlap));
         json_object_set_new(root, "ambiguity", json_real(r0->ambiguity));
         json_object_set_new(root, "evaluations", json_integer(r0->evaluations));
@@ -344,10 +357,10 @@ int cmd_pair(int argc, char **argv)
                r->evaluations_eta, r->applications, r->seconds,
                r->status == SASNAV_OK ? "converged" : sasnav_strerror(r->status));
         printf("time per stage: global %.2f s (%ld applications), zeta %.2f s (%ld), eta %.2f s (%ld), "
-               "final %.2f s (%ld, %d evaluations)\n",
+               "final %.2f s (%ld, %d evaluations, criterion %s)\n",
                r->seconds_global, r->applications_global, r->seconds_zeta, r->applications_zeta,
                r->seconds_eta, r->applications_eta, r->seconds_final, r->applications_final,
-               r->evaluations_final);
+               r->evaluations_final, sasnav_final_criterion_name(r->final_criterion));
         for (int kc = 0; kc < r->n_candidates; kc++) {
             const sasnav_pair_candidate *c = &r->candidates[kc];
             char scan_s[32];

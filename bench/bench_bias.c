@@ -117,7 +117,8 @@ static void usage(void)
 {
     fprintf(stderr, "usage: bench_bias [--seeds S0 N] [--snr DB|inf] [--models fixed,lags,yaw,full]\n"
                     "                  [--range-extent M] [--cross-extent M] [--error-extent M]\n"
-                    "                  [--k K] [--i I] [--scene-range Y0,Y1] [--threads T] [--quiet] [--gpu]\n");
+                    "                  [--k K] [--i I] [--scene-range Y0,Y1] [--threads T] [--quiet] [--gpu]\n"
+                    "                  [--final auto|eta|joint] [--joint-k K]\n");
 }
 
 int main(int argc, char **argv)
@@ -149,6 +150,11 @@ int main(int argc, char **argv)
         } else if (!strcmp(argv[a], "--threads") && a + 1 < argc) threads = atoi(argv[++a]);
         else if (!strcmp(argv[a], "--quiet")) quiet = 1;
         else if (!strcmp(argv[a], "--gpu")) po.gpu = 1;
+        else if (!strcmp(argv[a], "--final") && a + 1 < argc) {
+            a++;
+            po.final_criterion = !strcmp(argv[a], "joint") ? SASNAV_FINAL_JOINT
+                                 : !strcmp(argv[a], "eta") ? SASNAV_FINAL_ETA : SASNAV_FINAL_AUTO;
+        } else if (!strcmp(argv[a], "--joint-k") && a + 1 < argc) po.joint_k = atoi(argv[++a]);
         else {
             usage();
             return 2;

@@ -89,9 +89,15 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[a], "--paper-only")) paper_only = 1;
         else if (!strcmp(argv[a], "--range-extent") && a + 1 < argc) po.range_extent = atof(argv[++a]);
         else if (!strcmp(argv[a], "--pixel") && a + 1 < argc) po.pixel = atof(argv[++a]);
+        else if (!strcmp(argv[a], "--final") && a + 1 < argc) {
+            a++;
+            po.final_criterion = !strcmp(argv[a], "joint") ? SASNAV_FINAL_JOINT
+                                 : !strcmp(argv[a], "eta") ? SASNAV_FINAL_ETA : SASNAV_FINAL_AUTO;
+        } else if (!strcmp(argv[a], "--joint-k") && a + 1 < argc) po.joint_k = atoi(argv[++a]);
+        else if (!strcmp(argv[a], "--joint-mu") && a + 1 < argc) po.joint_mu = atof(argv[++a]);
         else {
             fprintf(stderr, "usage: bench_pair [--draws N] [--seed S] [--snr DB|inf] [--threads T] [--k K] [--i I] "
-                            "[--range-extent M] [--paper-only]\n");
+                            "[--range-extent M] [--paper-only] [--final auto|eta|joint] [--joint-k K] [--joint-mu M]\n");
             return 2;
         }
     }

@@ -17,7 +17,7 @@
  * usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE]
  *                    [--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows]
  *                    [--fused-lags] [--sub-lags] [--methods M1,M2,...]
- *                    [--k K] [--i I] [--gpu]
+ *                    [--k K] [--i I] [--gpu] [--final auto|eta|joint]
  *
  * Seeds follow `sasnav simulate --seed S --aiding` (scene 3S+1, trajectory
  * 3S+2, noise 3S+3, aiding 3S+4). Prints one line per run and method, then
@@ -38,7 +38,8 @@
  * fused+lags only, --sub-lags sub+lags only. --methods runs only the
  * named rows (e.g. `--methods fused+lags,aiding`: the default fusion and
  * dead reckoning, half the time of all rows). --k, --i set the subspace
- * estimator's final-stage iterations (default the estimator's 8, 8).
+ * estimator's final-stage iterations (default the estimator's 8, 8);
+ * --final its final-stage criterion (default the estimator's, auto).
  * --gpu runs the subspace rows' error evaluations on a CUDA GPU (builds with
  * -DSASNAV_CUDA=ON; docs/estimator.md, "GPU": the CPU's estimates to float
  * rounding, not to the bit). */
@@ -65,7 +66,7 @@ int main(int argc, char **argv)
 {
     long s0 = 1001, ns = 10;
     double snr = 30.0;
-    int threads = 0, speed_lags = 0, k_final = 0, i_final = 0, gpu = 0;
+    int threads = 0, speed_lags = 0, k_final = 0, i_final = 0, gpu = 0, final_c = -1;
     int use[N_METHODS] = {1, 1, 1, 1, 1, 1, 0, 0}; /* the methods run */
     double aiding_bias = 4e-4;
     const char *pairs_path = NULL;
@@ -106,10 +107,13 @@ int main(int argc, char **argv)
             k_final = atoi(argv[++a]);
         } else if (!strcmp(argv[a], "--i") && a + 1 < argc) {
             i_final = atoi(argv[++a]);
+        } else if (!strcmp(argv[a], "--final") && a + 1 < argc) {
+            final_c = sasnav_final_criterion_parse(argv[++a]);
+            if (final_c < 0) return 2;
         } else {
             fprintf(stderr, "usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE] "
                             "[--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows] [--fused-lags] [--sub-lags] "
-                            "[--methods M1,M2,...] [--k K] [--i I] [--gpu]\n");
+                            "[--methods M1,M2,...] [--k K] [--i I] [--gpu] [--final auto|eta|joint]\n");
             return 2;
         }
     }
@@ -148,6 +152,7 @@ int main(int argc, char **argv)
             sasnav_navigate_default_opts(&o);
             o.nthreads = threads;
             if (k_final > 0) o.pair.k = k_final;
+            if (final_c >= 0) o.pair.final_criterion = final_c;
             if (i_final > 0) o.pair.i = i_final;
             o.use_aiding = m == M_FUSED || m == M_FUSED_BIAS || m == M_AID || m == M_FUSED_LAGS;
             o.resolve = m != M_PAPER;

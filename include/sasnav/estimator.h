@@ -128,7 +128,38 @@ typedef struct {
                               SASNAV_ERR_UNSUPPORTED); 0 (default): the CPU.
                               Same criterion, agreeing to float rounding
                               (docs/estimator.md, "GPU") */
+    int final_criterion;   /* the final stage's criterion (docs/estimator.md,
+                              "A joint-misfit final stage"): SASNAV_FINAL_AUTO
+                              (default), SASNAV_FINAL_ETA or SASNAV_FINAL_JOINT */
+    int joint_k;           /* CGLS iterations of the joint misfit (default 40) */
+    double joint_mu;       /* its Tikhonov weight relative to the normal
+                              operator's Rayleigh quotient along the data
+                              (default 1e-3) */
+    double joint_shift_max;/* AUTO: the joint misfit when the pings' relative
+                              yaw shifts the beam footprint at the grid's
+                              range by at most this fraction of the grid's
+                              along-track extent (default 0.125: 0.02 rad
+                              in paper-pair), eta otherwise */
 } sasnav_pair_opts;
+
+/* The final stage's criterion (sasnav_pair_opts.final_criterion):
+ *   ETA    eta at the final iterations (k, i), the paper's;
+ *   JOINT  the joint misfit: one scene s on the grid explains both pings,
+ *          min_s ||phi_p - T_p s||^2 + ||phi_q - T_q(sigma) s||^2 +
+ *          mu ||s||^2 (joint_k CGLS iterations on the two pings stacked),
+ *          then eta at (k, i) once at its minimum for the verdict;
+ *   AUTO   JOINT when the pings' relative yaw is small (joint_shift_max),
+ *          ETA otherwise. */
+typedef enum {
+    SASNAV_FINAL_ETA = 0,
+    SASNAV_FINAL_JOINT = 1,
+    SASNAV_FINAL_AUTO = 2
+} sasnav_final_criterion;
+
+/* "eta", "joint", "auto" ("unknown" otherwise). */
+const char *sasnav_final_criterion_name(int criterion);
+/* The criterion named "eta", "joint" or "auto"; -1 for any other name. */
+int sasnav_final_criterion_parse(const char *name);
 
 void sasnav_pair_default_opts(sasnav_pair_opts *opts);
 
@@ -219,6 +250,8 @@ typedef struct {
     double margin;             /* level-1 eta of the best other distinct
                                   refined candidate over the chosen one's
                                   (INFINITY: no other candidate) */
+    int final_criterion;       /* the final stage's criterion used:
+                                  SASNAV_FINAL_ETA or SASNAV_FINAL_JOINT */
 } sasnav_pair_result;
 
 typedef struct sasnav_pair sasnav_pair;

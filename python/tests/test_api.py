@@ -70,6 +70,8 @@ def test_bad_arguments(paper_pair, tmp_path):
         sasnav.estimate_pair(paper_pair, 0, 1, no_such_option=1)
     with pytest.raises((sasnav.Error, ValueError)):
         sasnav.estimate_pair(paper_pair, 0, 1, k=0)
+    with pytest.raises(ValueError, match="final_criterion is one of"):
+        sasnav.estimate_pair(paper_pair, 0, 1, final_criterion="best")
     with pytest.raises(ValueError):
         sasnav.navigate(paper_pair, method="nope")
     with pytest.raises(ValueError):

@@ -41,6 +41,9 @@ def test_estimate_pair_paper(paper_pair):
     assert abs(err[0]) < 2e-3 and abs(err[1]) < 5e-4 and abs(err[2]) < 5e-4, err
     assert est.verdict == "ok" and est.status == "ok"
     assert est.eta < 0.6
+    # the pings' relative yaw (0.041 rad) shifts the beam by more than an
+    # eighth of the grid: the automatic final stage is eta's
+    assert est.final_criterion == "eta"
     assert est.candidates[est.chosen].chosen
     assert len(est.candidates) >= 2
     # displacement = nominal + error

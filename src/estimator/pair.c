@@ -52,6 +52,10 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
      * 30 % faster, estimates within 3 microns of those at 1e-6 on 40 draws
      * (docs/estimator.md). Simulated data keep the operator's default. */
     o->op.tolerance = 1e-3;
+    o->final_criterion = SASNAV_FINAL_AUTO;
+    o->joint_k = 40;
+    o->joint_mu = 1e-3;
+    o->joint_shift_max = 0.125;
 }
 
 static double nrm2(const sasnav_cfloat *v, size_t n)
@@ -264,6 +268,13 @@ int sasnav_pair_opts_check(const sasnav_pair_opts *o)
     if (!(o->verdict_margin_min >= 1) || !isfinite(o->verdict_margin_min))
         OPT_FAIL("verdict_margin_min %g must be finite and >= 1", o->verdict_margin_min);
     if (o->gpu != 0 && o->gpu != 1) OPT_FAIL("gpu = %d must be 0 or 1", o->gpu);
+    if (o->final_criterion != SASNAV_FINAL_ETA && o->final_criterion != SASNAV_FINAL_JOINT &&
+        o->final_criterion != SASNAV_FINAL_AUTO)
+        OPT_FAIL("final_criterion = %d must be SASNAV_FINAL_ETA, _JOINT or _AUTO", o->final_criterion);
+    if (!(o->joint_shift_max >= 0) || !isfinite(o->joint_shift_max))
+        OPT_FAIL("joint_shift_max %g must be finite and >= 0", o->joint_shift_max);
+    if (o->joint_k < 1) OPT_FAIL("joint_k = %d must be >= 1", o->joint_k);
+    if (!(o->joint_mu >= 0) || !isfinite(o->joint_mu)) OPT_FAIL("joint_mu %g must be finite and >= 0", o->joint_mu);
 #undef OPT_FAIL
 #ifndef SASNAV_HAVE_CUDA
     if (o->gpu)
@@ -371,6 +382,8 @@ void sasnav_pair_destroy(sasnav_pair *pr)
     free(pr->data_q);
     free(pr->chan_p);
     free(pr->chan_q);
+    free(pr->joint_x);
+    free(pr->joint_work);
     free(pr);
 }
 
@@ -1222,6 +1235,24 @@ int pair_eval_residual(sasnav_pair *pr, sasnav_pose error, int level, int use_et
     return SASNAV_OK;
 }
 
+const char *sasnav_final_criterion_name(int criterion)
+{
+    switch (criterion) {
+    case SASNAV_FINAL_ETA: return "eta";
+    case SASNAV_FINAL_JOINT: return "joint";
+    case SASNAV_FINAL_AUTO: return "auto";
+    default: return "unknown";
+    }
+}
+
+int sasnav_final_criterion_parse(const char *name)
+{
+    if (!name) return -1;
+    for (int c = SASNAV_FINAL_ETA; c <= SASNAV_FINAL_AUTO; c++)
+        if (!strcmp(name, sasnav_final_criterion_name(c))) return c;
+    return -1;
+}
+
 const char *sasnav_verdict_name(int verdict)
 {
     switch (verdict) {
@@ -1319,5 +1350,75 @@ int sasnav_pair_estimate_intervals(const sasnav_run *run, int p, int q,
         }
     }
     free(tx_yaw);
+    return SASNAV_OK;
+}
+
+/* The joint misfit's buffers (made at its first evaluation). */
+static int joint_buffers(sasnav_pair *pr, const pair_level *own)
+{
+    if (pr->joint_x) return SASNAV_OK;
+    pr->joint_x = malloc(sizeof(sasnav_cfloat) * own->np);
+    pr->joint_work = malloc(sizeof(sasnav_cfloat) * (3 * own->np + 2 * own->nd));
+    if (!pr->joint_x || !pr->joint_work) {
+        free(pr->joint_x);
+        free(pr->joint_work);
+        pr->joint_x = pr->joint_work = NULL;
+        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for the joint misfit");
+    }
+    return SASNAV_OK;
+}
+
+static double data_energy(const sasnav_pair *pr, size_t nd)
+{
+    double a = nrm2(pr->data_p, nd), b = nrm2(pr->data_q, nd);
+    return a * a + b * b;
+}
+
+size_t pair_joint_len(const sasnav_pair *pr)
+{
+    const pair_level *own = &pr->level[1];
+    return 2 * own->nd + own->np;
+}
+
+int pair_joint_tikhonov(sasnav_pair *pr, sasnav_pose error, double *lam)
+{
+    pair_level *own = ops_owner(pr, PAIR_LEVELS - 1);
+    int rc = joint_buffers(pr, own);
+    if (!rc) rc = place_q(pr, PAIR_LEVELS - 1, error);
+    if (rc) return rc;
+    sasnav_cfloat *s = pr->joint_x, *t = pr->joint_work;
+    rc = sasnav_op_adjoint(own->op_p, pr->data_p, s);
+    if (!rc) rc = sasnav_op_adjoint(own->op_q, pr->data_q, t);
+    pr->applications += 2;
+    if (rc) return rc;
+    for (size_t j = 0; j < own->np; j++) s[j] += t[j];
+    double a = nrm2(s, own->np), e = data_energy(pr, own->nd);
+    if (!(e > 0)) return sasnav_set_error(SASNAV_ERR_ARG, "the pings hold no signal");
+    *lam = pr->opts.joint_mu * a * a / e;
+    return SASNAV_OK;
+}
+
+int pair_eval_joint(sasnav_pair *pr, sasnav_pose error, double lam, sasnav_cfloat *r, double *f)
+{
+    if (!isfinite(error.x) || !isfinite(error.y) || !isfinite(error.theta))
+        return sasnav_set_error(SASNAV_ERR_ARG, "hypothesis is not finite");
+    pair_level *own = ops_owner(pr, PAIR_LEVELS - 1);
+    size_t np = own->np, nd = own->nd;
+    int rc = joint_buffers(pr, own);
+    if (!rc) rc = place_q(pr, PAIR_LEVELS - 1, error);
+    if (rc) return rc;
+    int two = !omp_in_parallel() && op_threads(own->op_p) >= 2 && op_threads(own->op_q) >= 2;
+    rc = cgls_stack(own->op_p, own->op_q, pr->data_p, pr->data_q, pr->opts.joint_k, lam, two, pr->joint_x,
+                    r, r + nd, pr->joint_work);
+    pr->applications += 2 * cgls_cost(pr->opts.joint_k);
+    pr->evaluations++;
+    if (rc) return rc;
+    /* r = (phi - T s, sqrt(lam) s) / ||phi||: its squared norm is the
+     * misfit over the data's energy */
+    float sl = (float)sqrt(lam);
+    for (size_t j = 0; j < np; j++) r[2 * nd + j] = sl * pr->joint_x[j];
+    float inv = (float)(1.0 / sqrt(data_energy(pr, nd)));
+    for (size_t j = 0; j < 2 * nd + np; j++) r[j] *= inv;
+    *f = nrm2(r, 2 * nd + np);
     return SASNAV_OK;
 }

@@ -87,6 +87,8 @@ struct sasnav_pair {
      * (no more are tried for this data). */
     struct sasnav_pair *twin[PAIR_MAX_WORKERS - 1];
     int n_twins, twin_failed;
+    /* The joint misfit's scene and CGLS work (pair_eval_joint). */
+    sasnav_cfloat *joint_x, *joint_work;
 };
 
 /* Scale (m) of the Gaussian high-pass applied to the moduli before their
@@ -110,6 +112,18 @@ int pair_image_shift(sasnav_pair *pr, int level, sasnav_pose error, double *sx, 
 int pair_eval_residual(sasnav_pair *pr, sasnav_pose error, int level, int use_eta,
                        sasnav_cfloat *r, double *f);
 size_t pair_level_points(const sasnav_pair *pr, int level);
+
+/* The joint misfit (docs/estimator.md, "A joint-misfit final stage") at
+ * the hypothesised error on the final level's grid: one scene s explains
+ * both pings, s = argmin ||phi_p - T_p s||^2 + ||phi_q - T_q s||^2 + lam
+ * ||s||^2 by opts.joint_k CGLS iterations on the two operators stacked;
+ * r (pair_joint_len entries) = (phi_p - T_p s, phi_q - T_q s, sqrt(lam) s)
+ * / ||phi||, *f = ||r||. pair_joint_tikhonov gives lam = joint_mu ||T^H
+ * phi||^2 / ||phi||^2 at a hypothesis (fixed for a whole stage, so that
+ * the misfit is one function of the hypothesis). */
+size_t pair_joint_len(const sasnav_pair *pr);
+int pair_joint_tikhonov(sasnav_pair *pr, sasnav_pose error, double *lam);
+int pair_eval_joint(sasnav_pair *pr, sasnav_pose error, double lam, sasnav_cfloat *r, double *f);
 
 /* The estimators that may evaluate hypotheses at once: w[0] = pr and up
  * to want - 1 twins (the same data, geometry and options but one thread,

@@ -34,6 +34,8 @@ typedef struct {
     int level, blurred, use_eta;
     int use_prior;          /* weight by the surge prior (opts.surge_sigma) */
     int ndim;               /* 3, or 2 with the yaw held (opts.fix_yaw) */
+    int joint;              /* 1: the joint misfit (pair_eval_joint) instead of zeta or eta */
+    double lam;             /* its Tikhonov weight */
     sasnav_pose centre, scale;
     int rc;
     int evals;
@@ -166,7 +168,14 @@ static void clip_step(int n, const double *u, double *d, const double *lb, const
 static int stage_residual(stage_ctx *c, const double *u, sasnav_cfloat *r, double *f)
 {
     c->evals++;
+    if (c->joint) return pair_eval_joint(c->pr, from_unit(c, u), c->lam, r, f);
     return pair_eval_residual(c->pr, from_unit(c, u), c->level, c->use_eta, r, f);
+}
+
+/* Length of the stage's residual vector. */
+static size_t stage_len(const stage_ctx *c)
+{
+    return c->joint ? pair_joint_len(c->pr) : pair_level_points(c->pr, c->level);
 }
 
 /* Residuals at n unit points (n evaluations counted), as many at once as
@@ -184,6 +193,7 @@ typedef struct {
 static int residual_item(sasnav_pair *w, int j, void *ctx)
 {
     residuals_job *b = ctx;
+    if (b->c->joint) return pair_eval_joint(w, from_unit(b->c, b->u[j]), b->c->lam, b->r[j], &b->f[j]);
     return pair_eval_residual(w, from_unit(b->c, b->u[j]), b->c->level, b->c->use_eta, b->r[j],
                               &b->f[j]);
 }
@@ -434,7 +444,7 @@ static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, doubl
 {
     const sasnav_pair_opts *o = sasnav_pair_options(c->pr);
     const int n = o->fix_yaw ? 2 : 3;
-    const size_t np = pair_level_points(c->pr, c->level);
+    const size_t np = stage_len(c);
     static const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
     const int npair = n * (n - 1) / 2;
     const int nv = 1 + 2 * n + npair + n + 2; /* model, J(u), r, trial r */
@@ -829,6 +839,7 @@ typedef struct {
     int evaluations_zeta, evaluations_eta, evaluations_final, zrc, erc;
     double seconds_zeta, seconds_eta, seconds_final;
     long applications_zeta, applications_eta, applications_final;
+    int final_criterion; /* the final stage's: SASNAV_FINAL_ETA or _JOINT */
 } refine_out;
 
 /* Stage 1 and the level-1 part of stage 2 from `start` (a global-stage
@@ -948,7 +959,29 @@ static int refine_final(sasnav_pair *pr, double pc_spacing, refine_out *out)
     sasnav_pose fstep = {pc_spacing / 50.0, lambda / 80.0, pc_spacing / 25.0 / o->range};
     sasnav_pose b = out->error;
     double f = out->eta;
-    int rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, 0.1, 4, &b, &f);
+    int rc = SASNAV_OK, joint = o->final_criterion == SASNAV_FINAL_JOINT;
+    if (o->final_criterion == SASNAV_FINAL_AUTO) {
+        /* The joint misfit when the two beams' footprints at the grid's
+         * range are shifted by at most joint_shift_max of the grid's
+         * along-track extent by the pings' relative yaw: beyond that its
+         * bias from the echoes of the seabed off the grid grows past eta's
+         * (docs/estimator.md, "A joint-misfit final stage"). */
+        const sasnav_grid *g = sasnav_pair_grid(pr);
+        double yaw = pr->nominal.theta + out->error.theta;
+        joint = fabs(yaw) * o->range <= o->joint_shift_max * (g->nx - 1) * g->dx;
+    }
+    out->final_criterion = joint ? SASNAV_FINAL_JOINT : SASNAV_FINAL_ETA;
+    if (joint) {
+        /* the joint misfit's Newton stage, then eta at (k, i) at its
+         * minimum: the verdict's eta bound and the overlap are eta's */
+        ctx.joint = 1;
+        rc = pair_joint_tikhonov(pr, out->error, &ctx.lam);
+        if (!rc) rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, 0.1, 4, &b, &f);
+        if (!rc) rc = sasnav_pair_eval(pr, b, PAIR_LEVELS - 1, 0, NULL, &f, NULL);
+        ctx.evals++;
+    } else {
+        rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, 0.1, 4, &b, &f);
+    }
     out->evaluations_eta += ctx.evals;
     out->evaluations_final = ctx.evals;
     if (rc) return rc;
@@ -1026,6 +1059,7 @@ static int finish(sasnav_pair *pr, double pc_spacing, refine_out *r, refine_out 
     res->zeta_stage = r->zeta_stage;
     res->zeta = r->zeta;
     res->eta = r->eta;
+    res->final_criterion = r->final_criterion;
     res->error = r->error;
     res->displacement = (sasnav_pose){pr->nominal.x + r->error.x, pr->nominal.y + r->error.y,
                                       pr->nominal.theta + r->error.theta};

@@ -43,4 +43,16 @@ void cgls_team(const sasnav_op *op, int n, const sasnav_cfloat *const *data, int
                double tikhonov, sasnav_cfloat *const *x, sasnav_cfloat *const *work,
                cgls_team_state *state);
 
+/* CGLS of min ||A x - a||^2 + ||B x - b||^2 + tikhonov ||x||^2 from x = 0
+ * (the two operators stacked as one: the joint misfit of a ping pair,
+ * src/estimator/pair.c), `iterations` steps: 2 applications of each
+ * operator per step but the last adjoint. Writes x (np) and the data
+ * residuals ra = a - A x, rb = b - B x of the last iterate (recursively
+ * updated, as CGLS does). work: 3 np + na + nb. two_threads: A's and B's
+ * applications side by side, one thread each (same bits). The operators
+ * must share one grid (the same np). */
+int cgls_stack(sasnav_op *A, sasnav_op *B, const sasnav_cfloat *a, const sasnav_cfloat *b,
+               int iterations, double tikhonov, int two_threads, sasnav_cfloat *x, sasnav_cfloat *ra,
+               sasnav_cfloat *rb, sasnav_cfloat *work);
+
 #endif

@@ -282,6 +282,10 @@ class PairOpts(Structure):  # estimator.h
         ("nthreads", c_int),
         ("op", OpOpts),
         ("gpu", c_int),
+        ("final_criterion", c_int),  # sasnav_final_criterion
+        ("joint_k", c_int),
+        ("joint_mu", c_double),
+        ("joint_shift_max", c_double),
     ]
 
 
@@ -329,6 +333,7 @@ class PairResult(Structure):  # estimator.h
         ("candidates", PairCandidate * PAIR_MAX_CANDIDATES),
         ("chosen", c_int),
         ("margin", c_double),
+        ("final_criterion", c_int),  # sasnav_final_criterion
     ]
 
 
@@ -568,6 +573,7 @@ PROTOTYPES = {
     # estimator.h
     "sasnav_pair_default_opts": (_v, [_P(PairOpts)]),
     "sasnav_verdict_name": (c_char_p, [_i]),
+    "sasnav_final_criterion_name": (c_char_p, [_i]),
     "sasnav_verdict_rank": (_i, [_i]),
     "sasnav_pair_create": (_i, [_P(SystemC), _P(SensorArrayC), _P(Window), _P(PairOpts),
                                 _P(c_void_p)]),

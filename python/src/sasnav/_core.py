@@ -832,7 +832,9 @@ _METHODS = {"subspace": 0, "dpca": 1, "aiding": 2}
 _METHOD_NAMES = {v: k for k, v in _METHODS.items()}
 _SPEED_LAGS = {"none": 0, "dvl": 1, "pairs": 2}
 _TX_YAW = {"none": 0, "auto": 1, "pairs": 2}
-_ENUMS = {"norm": _NORMS, "method": _METHODS, "speed_lags": _SPEED_LAGS, "tx_yaw": _TX_YAW}
+_FINALS = {"eta": 0, "joint": 1, "auto": 2}  # sasnav_final_criterion
+_ENUMS = {"norm": _NORMS, "method": _METHODS, "speed_lags": _SPEED_LAGS, "tx_yaw": _TX_YAW,
+          "final_criterion": _FINALS}
 # compact_pairs: the Python navigation reads `pairs` directly (packed pairs
 # save memory on long runs, where open_run's navigate_part serves).
 _NOT_SETTABLE = {"reuse", "progress", "progress_user", "compact_pairs", "done", "n_done"}
@@ -912,7 +914,8 @@ class PairEstimate:
 
     error, displacement, nominal, global_stage, zeta_stage: Pose;
     truth: the true motion error when the run holds the truth (else None);
-    zeta, eta: the error functions at the estimate; verdict: "ok",
+    zeta, eta: the error functions at the estimate; final_criterion: the
+    final stage's ("eta", "joint"; "none" for DPCA); verdict: "ok",
     "ambiguous", "failed", "no_overlap" or (DPCA) "unchecked"; margin (inf: no other
     candidate); candidates: list of Candidate; status: "ok" or the
     estimator's status text; result: the C struct (every field)."""
@@ -937,7 +940,15 @@ class PairEstimate:
     evaluations: int
     applications: int
     seconds: float
+    final_criterion: str
     result: C.PairResult = field(repr=False)
+
+
+def _final_name(r):
+    # DPCA's estimates (unchecked) and pairs never estimated have no final stage
+    if r.verdict == 4 or r.evaluations == 0:
+        return "none"
+    return lib().sasnav_final_criterion_name(int(r.final_criterion)).decode()
 
 
 def _estimate_from_c(r, p, q, nominal, truth):
@@ -951,6 +962,7 @@ def _estimate_from_c(r, p, q, nominal, truth):
                         r.ambiguity, r.margin, _verdict_name(r.verdict),
                         "ok" if r.status == 0 else _status_name(r.status), cands, r.chosen,
                         r.evaluations, r.applications, r.seconds,
+                        _final_name(r),
                         C.PairResult.from_buffer_copy(r))
 
 
@@ -980,7 +992,8 @@ def estimate_pair(run, p=0, q=1, *, prior_start=None, lags=None, **opts):
     opts: any field of sasnav_pair_opts (estimator.h) by name, e.g. k, i,
     prior=(s, w, y), box=(s, w, y), yaw_sigma, surge_sigma, fix_yaw,
     global_stage=0, range, range_extent, cross_extent, norm ("max", "p",
-    "q", "none"), op=dict(tolerance=...), threads (= nthreads). range and
+    "q", "none"), op=dict(tolerance=...), threads (= nthreads),
+    final_criterion ("auto", "eta", "joint"). range and
     tx_lag default to the run's range of interest and Tx-array offset.
     lags=(lag_p, lag_q): per-ping Tx-array offsets
     (sasnav_pair_set_data_lags). prior_start=(s, w, y): local stages only,
