@@ -46,10 +46,11 @@ static const char *help =
     "                    tx_lag, default) or 'motion' (speed x 2 R / c at the\n"
     "                    sub-interval's centre range R)\n"
     "  --final C         the final stage's criterion: 'auto' (default: the joint\n"
-    "                    misfit when the pings' relative yaw is small, else\n"
-    "                    eta), 'eta' (the paper's) or 'joint' (one scene\n"
-    "                    explains both pings; docs/estimator.md, \"A\n"
-    "                    joint-misfit final stage\")\n"
+    "                    misfit when the pings' relative yaw is small, eta\n"
+    "                    otherwise or where eta rejects the joint estimate),\n"
+    "                    'eta' (the paper's) or 'joint' (one scene explains\n"
+    "                    both pings; docs/estimator.md, \"A joint-misfit final\n"
+    "                    stage\")\n"
     "  --eta-max E       final eta above which the verdict is 'failed' (default\n"
     "                    0.6, calibrated at 10 m; correct survey-class pairs at\n"
     "                    70 m reach 0.6, slipped ones ~0.95: docs/estimator.md,\n"
@@ -268,6 +269,7 @@ int cmd_pair(int argc, char **argv)
         json_object_set_new(root, "zeta", json_real(r0->zeta));
         json_object_set_new(root, "eta", json_real(r0->eta));
         json_object_set_new(root, "final_criterion", json_string(sasnav_final_criterion_name(r0->final_criterion)));
+        json_object_set_new(root, "joint_rejected", json_boolean(r0->joint_rejected));
         json_object_set_new(root, "overlap", json_real(r0->overlap));
         json_object_set_new(root, "ambiguity", json_real(r0->ambiguity));
         json_object_set_new(root, "evaluations", json_integer(r0->evaluations));
@@ -360,7 +362,8 @@ int cmd_pair(int argc, char **argv)
                "final %.2f s (%ld, %d evaluations, criterion %s)\n",
                r->seconds_global, r->applications_global, r->seconds_zeta, r->applications_zeta,
                r->seconds_eta, r->applications_eta, r->seconds_final, r->applications_final,
-               r->evaluations_final, sasnav_final_criterion_name(r->final_criterion));
+               r->evaluations_final, r->joint_rejected ? "eta, the joint misfit's estimate rejected"
+                                                       : sasnav_final_criterion_name(r->final_criterion));
         for (int kc = 0; kc < r->n_candidates; kc++) {
             const sasnav_pair_candidate *c = &r->candidates[kc];
             char scan_s[32];

@@ -140,6 +140,10 @@ typedef struct {
                               range by at most this fraction of the grid's
                               along-track extent (default 0.125: 0.02 rad
                               in paper-pair), eta otherwise */
+    double joint_eta_ratio;/* the joint stage's estimate is kept when eta
+                              there is at most this ratio of eta at its
+                              start; otherwise eta's final stage runs from
+                              the start (default 1.05) */
 } sasnav_pair_opts;
 
 /* The final stage's criterion (sasnav_pair_opts.final_criterion):
@@ -252,6 +256,10 @@ typedef struct {
                                   (INFINITY: no other candidate) */
     int final_criterion;       /* the final stage's criterion used:
                                   SASNAV_FINAL_ETA or SASNAV_FINAL_JOINT */
+    int joint_rejected;        /* 1: the joint stage ran, but eta at its
+                                  estimate was above joint_eta_ratio of eta
+                                  at its start, and eta's final stage was
+                                  used instead */
 } sasnav_pair_result;
 
 typedef struct sasnav_pair sasnav_pair;

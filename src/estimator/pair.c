@@ -56,6 +56,7 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->joint_k = 40;
     o->joint_mu = 1e-3;
     o->joint_shift_max = 0.125;
+    o->joint_eta_ratio = 1.05;
 }
 
 static double nrm2(const sasnav_cfloat *v, size_t n)
@@ -273,6 +274,8 @@ int sasnav_pair_opts_check(const sasnav_pair_opts *o)
         OPT_FAIL("final_criterion = %d must be SASNAV_FINAL_ETA, _JOINT or _AUTO", o->final_criterion);
     if (!(o->joint_shift_max >= 0) || !isfinite(o->joint_shift_max))
         OPT_FAIL("joint_shift_max %g must be finite and >= 0", o->joint_shift_max);
+    if (!(o->joint_eta_ratio >= 1))
+        OPT_FAIL("joint_eta_ratio %g must be >= 1 (inf: never reject the joint estimate)", o->joint_eta_ratio);
     if (o->joint_k < 1) OPT_FAIL("joint_k = %d must be >= 1", o->joint_k);
     if (!(o->joint_mu >= 0) || !isfinite(o->joint_mu)) OPT_FAIL("joint_mu %g must be finite and >= 0", o->joint_mu);
 #undef OPT_FAIL

@@ -840,6 +840,7 @@ typedef struct {
     double seconds_zeta, seconds_eta, seconds_final;
     long applications_zeta, applications_eta, applications_final;
     int final_criterion; /* the final stage's: SASNAV_FINAL_ETA or _JOINT */
+    int joint_rejected;  /* the joint stage ran and eta rejected its estimate */
 } refine_out;
 
 /* Stage 1 and the level-1 part of stage 2 from `start` (a global-stage
@@ -972,13 +973,29 @@ static int refine_final(sasnav_pair *pr, double pc_spacing, refine_out *out)
     }
     out->final_criterion = joint ? SASNAV_FINAL_JOINT : SASNAV_FINAL_ETA;
     if (joint) {
-        /* the joint misfit's Newton stage, then eta at (k, i) at its
-         * minimum: the verdict's eta bound and the overlap are eta's */
+        /* The joint misfit's Newton stage from the level-1 result, then eta
+         * at (k, i) at its minimum (the verdict's eta bound and the overlap
+         * are eta's). Kept when eta there is at most joint_eta_ratio of eta
+         * at the start: where the joint model fails (the tank's compact
+         * scene: eta 1.5-3x higher at its minimum) eta's own final stage
+         * runs from the start instead (docs/estimator.md, "A joint-misfit
+         * final stage"). */
+        double e0 = HUGE_VAL;
+        rc = sasnav_pair_eval(pr, out->error, PAIR_LEVELS - 1, 0, NULL, &e0, NULL);
         ctx.joint = 1;
-        rc = pair_joint_tikhonov(pr, out->error, &ctx.lam);
+        if (!rc) rc = pair_joint_tikhonov(pr, out->error, &ctx.lam);
         if (!rc) rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, 0.1, 4, &b, &f);
+        int nj = ctx.evals + 2;
         if (!rc) rc = sasnav_pair_eval(pr, b, PAIR_LEVELS - 1, 0, NULL, &f, NULL);
-        ctx.evals++;
+        if (!rc && !(f <= o->joint_eta_ratio * e0)) {
+            ctx.joint = 0;
+            b = out->error;
+            rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, 0.1, 4, &b, &f);
+            nj += ctx.evals;
+            out->final_criterion = SASNAV_FINAL_ETA;
+            out->joint_rejected = 1;
+        }
+        ctx.evals = nj;
     } else {
         rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, 0.1, 4, &b, &f);
     }
@@ -1060,6 +1077,7 @@ static int finish(sasnav_pair *pr, double pc_spacing, refine_out *r, refine_out 
     res->zeta = r->zeta;
     res->eta = r->eta;
     res->final_criterion = r->final_criterion;
+    res->joint_rejected = r->joint_rejected;
     res->error = r->error;
     res->displacement = (sasnav_pose){pr->nominal.x + r->error.x, pr->nominal.y + r->error.y,
                                       pr->nominal.theta + r->error.theta};

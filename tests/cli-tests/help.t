@@ -101,7 +101,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   usage: sasnav pair run.h5 [--p I --q J] [--json] [--k K] [--i I]
                      [--prior S,W,Y] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]
                      [--cross-extent M] [--range-extent M]
-                     [--no-global] [--subintervals N] [--eta-max E]
+                     [--no-global] [--subintervals N] [--eta-max E] [--final C]
                      [--range R] [--lag-model fixed|motion] [--threads N] [--gpu]
   
   Estimates the motion error (displacement minus nominal) of ping q relative
@@ -131,6 +131,12 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --lag-model M     Tx-array offset per sub-interval: 'fixed' (the run's
                       tx_lag, default) or 'motion' (speed x 2 R / c at the
                       sub-interval's centre range R)
+    --final C         the final stage's criterion: 'auto' (default: the joint
+                      misfit when the pings' relative yaw is small, eta
+                      otherwise or where eta rejects the joint estimate),
+                      'eta' (the paper's) or 'joint' (one scene explains
+                      both pings; docs/estimator.md, "A joint-misfit final
+                      stage")
     --eta-max E       final eta above which the verdict is 'failed' (default
                       0.6, calibrated at 10 m; correct survey-class pairs at
                       70 m reach 0.6, slipped ones ~0.95: docs/estimator.md,
@@ -223,7 +229,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   $ sasnav navigate --help
   usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]
                          [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]
-                         [--cross-extent M] [--range-extent M] [--eta-max E]
+                         [--cross-extent M] [--range-extent M] [--eta-max E] [--final C]
                          [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]
                          [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]
                          [--threads N] [--gpu] [--json] [--checkpoint FILE]
@@ -273,6 +279,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       errors for 2.5x the time; docs/estimator.md)
     --eta-max E       final eta above which a pair's verdict is 'failed'
                       (default 0.6; see 'sasnav pair --help')
+    --final C         each pair's final-stage criterion: auto (default), eta
+                      or joint (see 'sasnav pair --help')
     --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)
     --no-aiding       ignore the run's aiding measurements
     --no-resolve      take each pair's own estimate (no joint resolution, no

@@ -286,6 +286,7 @@ class PairOpts(Structure):  # estimator.h
         ("joint_k", c_int),
         ("joint_mu", c_double),
         ("joint_shift_max", c_double),
+        ("joint_eta_ratio", c_double),
     ]
 
 
@@ -334,6 +335,7 @@ class PairResult(Structure):  # estimator.h
         ("chosen", c_int),
         ("margin", c_double),
         ("final_criterion", c_int),  # sasnav_final_criterion
+        ("joint_rejected", c_int),
     ]
 
 
