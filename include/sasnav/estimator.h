@@ -152,8 +152,9 @@ typedef struct {
  *          min_s ||phi_p - T_p s||^2 + ||phi_q - T_q(sigma) s||^2 +
  *          mu ||s||^2 (joint_k CGLS iterations on the two pings stacked),
  *          then eta at (k, i) once at its minimum for the verdict;
- *   AUTO   JOINT when the pings' relative yaw is small (joint_shift_max),
- *          ETA otherwise. */
+ *   AUTO   JOINT when the pings' relative yaw is small (joint_shift_max)
+ *          and eta agrees with its estimate (joint_eta_ratio), ETA
+ *          otherwise and on the GPU path (opts.gpu). */
 typedef enum {
     SASNAV_FINAL_ETA = 0,
     SASNAV_FINAL_JOINT = 1,

@@ -961,12 +961,14 @@ static int refine_final(sasnav_pair *pr, double pc_spacing, refine_out *out)
     sasnav_pose b = out->error;
     double f = out->eta;
     int rc = SASNAV_OK, joint = o->final_criterion == SASNAV_FINAL_JOINT;
-    if (o->final_criterion == SASNAV_FINAL_AUTO) {
+    if (o->final_criterion == SASNAV_FINAL_AUTO && !o->gpu) {
         /* The joint misfit when the two beams' footprints at the grid's
          * range are shifted by at most joint_shift_max of the grid's
          * along-track extent by the pings' relative yaw: beyond that its
          * bias from the echoes of the seabed off the grid grows past eta's
-         * (docs/estimator.md, "A joint-misfit final stage"). */
+         * (docs/estimator.md, "A joint-misfit final stage"). Not on the
+         * GPU path: the joint misfit has no device implementation, and on
+         * the CPU it would cost more than eta's stage on the device. */
         const sasnav_grid *g = sasnav_pair_grid(pr);
         double yaw = pr->nominal.theta + out->error.theta;
         joint = fabs(yaw) * o->range <= o->joint_shift_max * (g->nx - 1) * g->dx;
