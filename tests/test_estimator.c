@@ -348,13 +348,25 @@ static void check_opts_rules(void)
     sasnav_pair_opts o;
     sasnav_pair_default_opts(&o);
     CHECK(sasnav_pair_opts_check(&o) == SASNAV_OK, "defaults refused: %s", sasnav_last_error());
-    static const char *const says[] = {"fix_yaw and yaw_sigma", "k = 0", "surge_sigma", "tx_lag"};
-    for (int c = 0; c < 4; c++) {
+    CHECK(o.final_criterion == SASNAV_FINAL_AUTO, "default final criterion %d", o.final_criterion);
+    for (int c = SASNAV_FINAL_ETA; c <= SASNAV_FINAL_AUTO; c++)
+        CHECK(sasnav_final_criterion_parse(sasnav_final_criterion_name(c)) == c, "criterion %d's name", c);
+    CHECK(sasnav_final_criterion_parse("best") == -1 && sasnav_final_criterion_parse(NULL) == -1,
+          "an unknown criterion name accepted");
+    static const char *const says[] = {"fix_yaw and yaw_sigma", "k = 0", "surge_sigma", "tx_lag",
+                                       "final_criterion = 7", "joint_k = 0", "joint_mu", "joint_eta_ratio 0.9",
+                                       "joint_shift_max"};
+    for (int c = 0; c < 9; c++) {
         sasnav_pair_default_opts(&o);
         if (c == 0) { o.fix_yaw = 1; o.yaw_sigma = 1e-3; }
         if (c == 1) o.k = 0;
         if (c == 2) o.surge_sigma = NAN;
         if (c == 3) o.tx_lag = -0.1;
+        if (c == 4) o.final_criterion = 7;
+        if (c == 5) o.joint_k = 0;
+        if (c == 6) o.joint_mu = -1;
+        if (c == 7) o.joint_eta_ratio = 0.9;
+        if (c == 8) o.joint_shift_max = INFINITY;
         CHECK(sasnav_pair_opts_check(&o) == SASNAV_ERR_ARG && strstr(sasnav_last_error(), says[c]),
               "case %d should be refused naming '%s': %s", c, says[c], sasnav_last_error());
     }
