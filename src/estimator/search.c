@@ -979,7 +979,7 @@ static int refine_final(sasnav_pair *pr, double pc_spacing, refine_out *out)
          * at (k, i) at its minimum (the verdict's eta bound and the overlap
          * are eta's). Kept when eta there is at most joint_eta_ratio of eta
          * at the start: where the joint model fails (the tank's compact
-         * scene: eta 1.5-3x higher at its minimum) eta's own final stage
+         * scene: eta 1.1-3.2x higher at its minimum) eta's own final stage
          * runs from the start instead (docs/estimator.md, "A joint-misfit
          * final stage"). */
         double e0 = HUGE_VAL;
