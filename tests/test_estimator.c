@@ -355,8 +355,8 @@ static void check_opts_rules(void)
           "an unknown criterion name accepted");
     static const char *const says[] = {"fix_yaw and yaw_sigma", "k = 0", "surge_sigma", "tx_lag",
                                        "final_criterion = 7", "joint_k = 0", "joint_mu", "joint_eta_ratio 0.9",
-                                       "joint_shift_max"};
-    for (int c = 0; c < 9; c++) {
+                                       "joint_shift_max", "joint_contrast_max"};
+    for (int c = 0; c < 10; c++) {
         sasnav_pair_default_opts(&o);
         if (c == 0) { o.fix_yaw = 1; o.yaw_sigma = 1e-3; }
         if (c == 1) o.k = 0;
@@ -367,6 +367,7 @@ static void check_opts_rules(void)
         if (c == 6) o.joint_mu = -1;
         if (c == 7) o.joint_eta_ratio = 0.9;
         if (c == 8) o.joint_shift_max = INFINITY;
+        if (c == 9) o.joint_contrast_max = NAN;
         CHECK(sasnav_pair_opts_check(&o) == SASNAV_ERR_ARG && strstr(sasnav_last_error(), says[c]),
               "case %d should be refused naming '%s': %s", c, says[c], sasnav_last_error());
     }

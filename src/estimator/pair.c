@@ -57,6 +57,7 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->joint_mu = 1e-3;
     o->joint_shift_max = 0.125;
     o->joint_eta_ratio = 1.05;
+    o->joint_contrast_max = 5.0;
 }
 
 static double nrm2(const sasnav_cfloat *v, size_t n)
@@ -180,6 +181,20 @@ static int level_rho_p(sasnav_pair *pr, pair_level *lv)
     pr->applications += cgls_cost(lv->k);
     if (rc) return rc;
     lv->rho_p_norm = nrm2(lv->rho_p, lv->np);
+    /* The contrast of p's intensity |rho_p|^2 over the error window
+     * (standard deviation over mean): about 1 for fully developed speckle,
+     * 1.7-3.9 on the simulated seabeds, 6-13 on the tank's four
+     * reflectors (docs/estimator.md, "A joint-misfit final stage"). */
+    double s1 = 0, s2 = 0, w = 0;
+    for (size_t j = 0; j < lv->np; j++) {
+        double iv = (double)crealf(lv->rho_p[j]) * crealf(lv->rho_p[j]) +
+                    (double)cimagf(lv->rho_p[j]) * cimagf(lv->rho_p[j]);
+        s1 += lv->window[j] * iv;
+        s2 += lv->window[j] * iv * iv;
+        w += lv->window[j];
+    }
+    double mean = w > 0 ? s1 / w : 0, var = w > 0 ? s2 / w - mean * mean : 0;
+    lv->contrast = mean > 0 && var > 0 ? sqrt(var) / mean : 0.0;
     if (!(lv->rho_p_norm > 0))
         return sasnav_set_error(SASNAV_ERR_NO_OVERLAP,
                                 "ping p sees nothing on the estimation grid (range %g m): "
@@ -274,6 +289,7 @@ int sasnav_pair_opts_check(const sasnav_pair_opts *o)
         OPT_FAIL("final_criterion = %d must be SASNAV_FINAL_ETA, _JOINT or _AUTO", o->final_criterion);
     if (!(o->joint_shift_max >= 0) || !isfinite(o->joint_shift_max))
         OPT_FAIL("joint_shift_max %g must be finite and >= 0", o->joint_shift_max);
+    if (!(o->joint_contrast_max >= 0)) OPT_FAIL("joint_contrast_max %g must be >= 0", o->joint_contrast_max);
     if (!(o->joint_eta_ratio >= 1))
         OPT_FAIL("joint_eta_ratio %g must be >= 1 (inf: never reject the joint estimate)", o->joint_eta_ratio);
     if (o->joint_k < 1) OPT_FAIL("joint_k = %d must be >= 1", o->joint_k);
@@ -1382,6 +1398,8 @@ size_t pair_joint_len(const sasnav_pair *pr)
     const pair_level *own = &pr->level[1];
     return 2 * own->nd + own->np;
 }
+
+double pair_contrast(const sasnav_pair *pr) { return pr->level[1].contrast; }
 
 int pair_joint_tikhonov(sasnav_pair *pr, sasnav_pose error, double *lam)
 {

@@ -51,6 +51,7 @@ typedef struct {
     double *mod_p, *mod_q, *blur_tmp;
     float *window;
     double rho_p_norm;
+    double contrast;         /* of |rho_p|^2 over the window (std / mean) */
     /* 2-D cross-correlation of |rho_p| and |rho_q| (global stage). */
     int xc_nx, xc_ny;
     fftwf_complex *xc_p, *xc_q;
@@ -122,6 +123,10 @@ size_t pair_level_points(const sasnav_pair *pr, int level);
  * phi||^2 / ||phi||^2 at a hypothesis (fixed for a whole stage, so that
  * the misfit is one function of the hypothesis). */
 size_t pair_joint_len(const sasnav_pair *pr);
+/* The intensity contrast (standard deviation over mean of |rho_p|^2 over
+ * the error window) of p's reconstruction at level 1: ~1 for speckle, far
+ * above for a few bright points. */
+double pair_contrast(const sasnav_pair *pr);
 int pair_joint_tikhonov(sasnav_pair *pr, sasnav_pose error, double *lam);
 int pair_eval_joint(sasnav_pair *pr, sasnav_pose error, double lam, sasnav_cfloat *r, double *f);
 

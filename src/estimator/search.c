@@ -966,12 +966,15 @@ static int refine_final(sasnav_pair *pr, double pc_spacing, refine_out *out)
          * range are shifted by at most joint_shift_max of the grid's
          * along-track extent by the pings' relative yaw: beyond that its
          * bias from the echoes of the seabed off the grid grows past eta's
-         * (docs/estimator.md, "A joint-misfit final stage"). Not on the
+         * (docs/estimator.md, "A joint-misfit final stage"); and only on
+         * a speckle-like scene (the joint misfit's white Gaussian scene):
+         * on a few bright reflectors (the tank) it biases the surge. Not on the
          * GPU path: the joint misfit has no device implementation, and on
          * the CPU it would cost more than eta's stage on the device. */
         const sasnav_grid *g = sasnav_pair_grid(pr);
         double yaw = pr->nominal.theta + out->error.theta;
-        joint = fabs(yaw) * o->range <= o->joint_shift_max * (g->nx - 1) * g->dx;
+        joint = fabs(yaw) * o->range <= o->joint_shift_max * (g->nx - 1) * g->dx &&
+                pair_contrast(pr) <= o->joint_contrast_max;
     }
     out->final_criterion = joint ? SASNAV_FINAL_JOINT : SASNAV_FINAL_ETA;
     if (joint) {

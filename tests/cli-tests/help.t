@@ -132,8 +132,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       tx_lag, default) or 'motion' (speed x 2 R / c at the
                       sub-interval's centre range R)
     --final C         the final stage's criterion: 'auto' (default: the joint
-                      misfit when the pings' relative yaw is small, eta
-                      otherwise or where eta rejects the joint estimate),
+                      misfit when the pings' relative yaw is small and the
+                      scene speckle-like, eta otherwise or where eta
+                      rejects the joint estimate),
                       'eta' (the paper's) or 'joint' (one scene explains
                       both pings; docs/estimator.md, "A joint-misfit final
                       stage")

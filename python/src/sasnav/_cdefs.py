@@ -286,6 +286,7 @@ class PairOpts(Structure):  # estimator.h
         ("joint_k", c_int),
         ("joint_mu", c_double),
         ("joint_shift_max", c_double),
+        ("joint_contrast_max", c_double),
         ("joint_eta_ratio", c_double),
     ]
 
