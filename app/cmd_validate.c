@@ -26,7 +26,9 @@ static const char *help =
     "The validation method of the paper's tank experiment (Sec. V): from a run\n"
     "whose pings step by whole phase-centre spacings (the tank: K = 7 of 8\n"
     "phase centres shared), builds the sub-sampled runs with K = k-min..k-max\n"
-    "shared phase centres and all their phases, navigates each, combines the\n"
+    "shared phase centres and all their phases, navigates each (every pair's\n"
+    "estimate chained as it is, the paper's method: no joint resolution;\n"
+    "pairs whose verdict is not \"ok\" are counted and warned about), combines the\n"
     "phases into one trajectory per K (placed on the largest K's, which is\n"
     "rotated by its fitted track angle), re-arranges the data into SISO (one\n"
     "receiver, all pings) and SIMO (every N-th ping, all receivers) apertures,\n"
@@ -40,7 +42,7 @@ static const char *help =
     "  validate.json       the summary (also on stdout with --json)\n"
     "  trajectories.csv    ping, K, along-track, cross-track, yaw (aligned)\n"
     "  pairs.csv           every pair estimate (motion error; its error vs the\n"
-    "                      truth when known) and status\n"
+    "                      truth when known), status and verdict\n"
     "  trajectories.png    along/cross-track deviation from the mean of the K\n"
     "  correlation.csv     pairwise image correlations (navigated images)\n"
     "  siso_J.png, simo_J.png   images with the largest K's trajectory\n"
@@ -132,6 +134,7 @@ static json_t *summary(const char *input, const sasnav_validation *v, int refine
         json_object_set_new(o, "stride", json_integer(vk->stride));
         json_object_set_new(o, "pairs", json_integer(vk->n_pairs));
         json_object_set_new(o, "failed_pairs", json_integer(vk->n_failed));
+        json_object_set_new(o, "flagged_pairs", json_integer(vk->n_flagged));
         json_object_set_new(o, "track_angle", num(vk->track_angle));
         if (v->has_truth)
             json_object_set_new(o, "rms_error", json_pack("{s:f,s:f,s:f}", "surge", vk->rms_error.x, "sway",
@@ -174,7 +177,7 @@ static int write_tables(const char *dir, const sasnav_validation *v)
     if ((rc = sasnav_text_commit(&out))) return rc;
     join(path, sizeof path, dir, "pairs.csv");
     if ((rc = sasnav_text_open(&out, path))) return rc;
-    fprintf(out.f, "k,p,q,surge,sway,yaw,error_surge,error_sway,error_yaw,status\n");
+    fprintf(out.f, "k,p,q,surge,sway,yaw,error_surge,error_sway,error_yaw,status,verdict\n");
     for (int k = 0; k < v->n_k; k++)
         for (int j = 0; j < v->k[k].n_pairs; j++) {
             const sasnav_navigate_pair *np = &v->k[k].pairs[j];
@@ -182,7 +185,8 @@ static int write_tables(const char *dir, const sasnav_validation *v)
                     np->result.error.y, np->result.error.theta);
             if (v->has_truth) fprintf(out.f, "%.9f,%.9f,%.6e,", np->error.x, np->error.y, np->error.theta);
             else fprintf(out.f, ",,,");
-            fprintf(out.f, "%s\n", np->status == SASNAV_OK ? "ok" : sasnav_strerror(np->status));
+            fprintf(out.f, "%s,%s\n", np->status == SASNAV_OK ? "ok" : sasnav_strerror(np->status),
+                    sasnav_verdict_name(np->verdict));
         }
     if ((rc = sasnav_text_commit(&out))) return rc;
     join(path, sizeof path, dir, "correlation.csv");
@@ -296,13 +300,13 @@ static int write_report(const char *dir, const char *input, const sasnav_validat
         fprintf(f, " Every phase refined on its own pings by the multi-ping data-domain fit "
                    "(docs/navigation.md).");
     fputs("\n\n", f);
-    fprintf(f, "| K | stride | pairs | failed | track angle (rad) |%s time (s) |\n",
+    fprintf(f, "| K | stride | pairs | failed | flagged | track angle (rad) |%s time (s) |\n",
             v->has_truth ? " rms surge / sway vs truth (mm) | pairs alone (mm) |" : "");
-    fprintf(f, "|---|---|---|---|---|%s---|\n", v->has_truth ? "---|---|" : "");
+    fprintf(f, "|---|---|---|---|---|---|%s---|\n", v->has_truth ? "---|---|" : "");
     for (int k = 0; k < v->n_k; k++) {
         const sasnav_validate_k *vk = &v->k[k];
-        fprintf(f, "| %d | %d | %d | %d | %+.4e |", vk->k, vk->stride, vk->n_pairs, vk->n_failed,
-                vk->track_angle);
+        fprintf(f, "| %d | %d | %d | %d | %d | %+.4e |", vk->k, vk->stride, vk->n_pairs, vk->n_failed,
+                vk->n_flagged, vk->track_angle);
         if (v->has_truth)
             fprintf(f, " %.3f / %.3f | %.3f / %.3f |", 1e3 * vk->rms_error.x, 1e3 * vk->rms_error.y,
                     1e3 * vk->rms_error_pairs.x, 1e3 * vk->rms_error_pairs.y);
@@ -471,6 +475,16 @@ int cmd_validate(int argc, char **argv)
         if (v.has_truth) printf(", true nav %.3f", v.min_correlation_truth);
         printf(")\n");
     }
+    int n_pairs = 0, n_flagged = 0;
+    for (int j = 0; j < v.n_k; j++) {
+        n_pairs += v.k[j].n_pairs;
+        n_flagged += v.k[j].n_flagged;
+    }
+    if (n_flagged)
+        fprintf(stderr,
+                "sasnav validate: warning: %d of %d pairs flagged (verdict not \"ok\"), used as estimated; "
+                "see pairs.csv\n",
+                n_flagged, n_pairs);
     fprintf(stderr, "sasnav validate: %d trajectories, %d images, %.1f s -> %s\n", v.n_k, v.n_images,
             v.seconds, output);
     free(text);

@@ -38,6 +38,11 @@ if "$CLI" validate "$T/tank.h5" --fix-yaw --surge-sigma 0.025 --k-min 7 --k 2 --
     done
     ls "$T/val" | grep -q 'tmp' && fail "temporary files left in the output directory"
     grep -q "Surge prior (--surge-sigma): 0.025 m" "$T/val/report.md" || fail "report.md does not state the surge prior"
+    grep -q '"flagged_pairs"' "$T/val.json" || fail "JSON lacks \"flagged_pairs\""
+    head -n 1 "$T/val/pairs.csv" | grep -q ',status,verdict$' || fail "pairs.csv lacks the verdict column"
+    # every pair's verdict is one of the estimator's names
+    tail -n +2 "$T/val/pairs.csv" | awk -F, '$NF !~ /^(ok|ambiguous|failed|no_overlap)$/ { bad = 1 } END { exit bad }' ||
+        fail "pairs.csv holds a verdict that is not a verdict name"
     # values: jump within 1 mm, array yaw within 2e-3 rad (awk reads the JSON lines)
     awk -F': ' '/"surge_jump_error"/ { gsub(/,/, "", $2); j = $2 }
                 /"yaw_error"/ { gsub(/,/, "", $2); y = $2 }

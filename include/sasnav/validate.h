@@ -57,7 +57,11 @@ typedef struct {
     sasnav_navigate_opts nav;  /* per-phase navigation (align is forced off;
                                   nav.long_baselines adds the pairs two
                                   steps apart within each sub-sampled run,
-                                  combined by least squares) */
+                                  combined by least squares; nav.resolve
+                                  defaults to 0 here: each pair's estimate
+                                  chained, the paper's method, without the
+                                  vehicle motion model of the joint
+                                  resolution) */
     sasnav_grid grid;          /* image grid; nx = 0 (default): the track's
                                   along-track extent, range of interest
                                   +-0.35 m, 5 mm pixels */
@@ -82,6 +86,8 @@ typedef struct {
     int n_pairs;               /* pairs estimated over all phases */
     sasnav_navigate_pair *pairs; /* their results (p, q in the run's indices) */
     int n_failed;              /* pairs whose estimate failed (nominal used) */
+    int n_flagged;             /* pairs whose verdict is not "ok" (ambiguous,
+                                  failed), used as estimated */
     sasnav_pose *centroids;    /* n_pings combined, aligned centroids (refined
                                   when opts.refine) */
     sasnav_pose *centroids_pairs; /* the same from the pair estimates alone */

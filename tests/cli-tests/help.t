@@ -445,7 +445,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   The validation method of the paper's tank experiment (Sec. V): from a run
   whose pings step by whole phase-centre spacings (the tank: K = 7 of 8
   phase centres shared), builds the sub-sampled runs with K = k-min..k-max
-  shared phase centres and all their phases, navigates each, combines the
+  shared phase centres and all their phases, navigates each (every pair's
+  estimate chained as it is, the paper's method: no joint resolution;
+  pairs whose verdict is not "ok" are counted and warned about), combines the
   phases into one trajectory per K (placed on the largest K's, which is
   rotated by its fitted track angle), re-arranges the data into SISO (one
   receiver, all pings) and SIMO (every N-th ping, all receivers) apertures,
@@ -459,7 +461,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     validate.json       the summary (also on stdout with --json)
     trajectories.csv    ping, K, along-track, cross-track, yaw (aligned)
     pairs.csv           every pair estimate (motion error; its error vs the
-                        truth when known) and status
+                        truth when known), status and verdict
     trajectories.png    along/cross-track deviation from the mean of the K
     correlation.csv     pairwise image correlations (navigated images)
     siso_J.png, simo_J.png   images with the largest K's trajectory
