@@ -155,6 +155,7 @@ int main(int argc, char **argv)
             po.final_criterion = !strcmp(argv[a], "joint") ? SASNAV_FINAL_JOINT
                                  : !strcmp(argv[a], "eta") ? SASNAV_FINAL_ETA : SASNAV_FINAL_AUTO;
         } else if (!strcmp(argv[a], "--joint-k") && a + 1 < argc) po.joint_k = atoi(argv[++a]);
+        else if (!strcmp(argv[a], "--joint-eta-ratio") && a + 1 < argc) po.joint_eta_ratio = atof(argv[++a]);
         else {
             usage();
             return 2;

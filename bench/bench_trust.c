@@ -17,7 +17,7 @@
  * usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE]
  *                    [--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows]
  *                    [--fused-lags] [--sub-lags] [--methods M1,M2,...]
- *                    [--k K] [--i I] [--gpu] [--final auto|eta|joint]
+ *                    [--k K] [--i I] [--gpu] [--final auto|eta|joint] [--joint-eta-ratio R]
  *
  * Seeds follow `sasnav simulate --seed S --aiding` (scene 3S+1, trajectory
  * 3S+2, noise 3S+3, aiding 3S+4). Prints one line per run and method, then
@@ -67,6 +67,7 @@ int main(int argc, char **argv)
     long s0 = 1001, ns = 10;
     double snr = 30.0;
     int threads = 0, speed_lags = 0, k_final = 0, i_final = 0, gpu = 0, final_c = -1;
+    double eta_ratio = 0; /* > 0: opts.pair.joint_eta_ratio */
     int use[N_METHODS] = {1, 1, 1, 1, 1, 1, 0, 0}; /* the methods run */
     double aiding_bias = 4e-4;
     const char *pairs_path = NULL;
@@ -110,10 +111,13 @@ int main(int argc, char **argv)
         } else if (!strcmp(argv[a], "--final") && a + 1 < argc) {
             final_c = sasnav_final_criterion_parse(argv[++a]);
             if (final_c < 0) return 2;
+        } else if (!strcmp(argv[a], "--joint-eta-ratio") && a + 1 < argc) {
+            eta_ratio = atof(argv[++a]);
         } else {
             fprintf(stderr, "usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE] "
                             "[--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows] [--fused-lags] [--sub-lags] "
-                            "[--methods M1,M2,...] [--k K] [--i I] [--gpu] [--final auto|eta|joint]\n");
+                            "[--methods M1,M2,...] [--k K] [--i I] [--gpu] [--final auto|eta|joint] "
+                            "[--joint-eta-ratio R]\n");
             return 2;
         }
     }
@@ -153,6 +157,7 @@ int main(int argc, char **argv)
             o.nthreads = threads;
             if (k_final > 0) o.pair.k = k_final;
             if (final_c >= 0) o.pair.final_criterion = final_c;
+            if (eta_ratio > 0) o.pair.joint_eta_ratio = eta_ratio;
             if (i_final > 0) o.pair.i = i_final;
             o.use_aiding = m == M_FUSED || m == M_FUSED_BIAS || m == M_AID || m == M_FUSED_LAGS;
             o.resolve = m != M_PAPER;

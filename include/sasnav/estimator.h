@@ -145,10 +145,14 @@ typedef struct {
                               (std / mean of |rho_p|^2 over the window) is
                               at most this (default 5: speckle-like
                               seabeds, not a few bright points) */
-    double joint_eta_ratio;/* the joint stage's estimate is kept when eta
-                              there is at most this ratio of eta at its
-                              start; otherwise eta's final stage runs from
-                              the start (default 1.05) */
+    double joint_eta_ratio;/* finite: the joint stage's estimate is kept
+                              when eta there is at most this ratio of eta
+                              at its start (one more level-2 evaluation),
+                              otherwise eta's final stage runs from the
+                              start; default INFINITY: no such check
+                              (docs/estimator.md: on trajectory pairs it
+                              did harm; the contrast rule keeps compact
+                              scenes on eta's stage) */
 } sasnav_pair_opts;
 
 /* The final stage's criterion (sasnav_pair_opts.final_criterion):
@@ -157,10 +161,10 @@ typedef struct {
  *          min_s ||phi_p - T_p s||^2 + ||phi_q - T_q(sigma) s||^2 +
  *          mu ||s||^2 (joint_k CGLS iterations on the two pings stacked),
  *          then eta at (k, i) once at its minimum for the verdict;
- *   AUTO   JOINT when the pings' relative yaw is small (joint_shift_max),
- *          the scene is speckle-like (joint_contrast_max) and eta agrees
- *          with its estimate (joint_eta_ratio); ETA otherwise and on the
- *          GPU path (opts.gpu). */
+ *   AUTO   JOINT when the pings' relative yaw is small (joint_shift_max)
+ *          and the scene is speckle-like (joint_contrast_max), and (with a
+ *          finite joint_eta_ratio) eta agrees with its estimate; ETA
+ *          otherwise and on the GPU path (opts.gpu). */
 typedef enum {
     SASNAV_FINAL_ETA = 0,
     SASNAV_FINAL_JOINT = 1,

@@ -56,7 +56,7 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->joint_k = 40;
     o->joint_mu = 1e-3;
     o->joint_shift_max = 0.125;
-    o->joint_eta_ratio = 1.05;
+    o->joint_eta_ratio = INFINITY;
     o->joint_contrast_max = 5.0;
 }
 

@@ -133,8 +133,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       sub-interval's centre range R)
     --final C         the final stage's criterion: 'auto' (default: the joint
                       misfit when the pings' relative yaw is small and the
-                      scene speckle-like, eta otherwise or where eta
-                      rejects the joint estimate),
+                      scene speckle-like, eta otherwise),
                       'eta' (the paper's) or 'joint' (one scene explains
                       both pings; docs/estimator.md, "A joint-misfit final
                       stage")
