@@ -118,7 +118,7 @@ static void usage(void)
     fprintf(stderr, "usage: bench_bias [--seeds S0 N] [--snr DB|inf] [--models fixed,lags,yaw,full]\n"
                     "                  [--range-extent M] [--cross-extent M] [--error-extent M]\n"
                     "                  [--k K] [--i I] [--scene-range Y0,Y1] [--threads T] [--quiet] [--gpu]\n"
-                    "                  [--final auto|eta|joint] [--joint-k K]\n");
+                    "                  [--final auto|eta|joint] [--joint-k K] [--joint-mu M]\n");
 }
 
 int main(int argc, char **argv)
@@ -155,6 +155,7 @@ int main(int argc, char **argv)
             po.final_criterion = !strcmp(argv[a], "joint") ? SASNAV_FINAL_JOINT
                                  : !strcmp(argv[a], "eta") ? SASNAV_FINAL_ETA : SASNAV_FINAL_AUTO;
         } else if (!strcmp(argv[a], "--joint-k") && a + 1 < argc) po.joint_k = atoi(argv[++a]);
+        else if (!strcmp(argv[a], "--joint-mu") && a + 1 < argc) po.joint_mu = atof(argv[++a]);
         else if (!strcmp(argv[a], "--joint-eta-ratio") && a + 1 < argc) po.joint_eta_ratio = atof(argv[++a]);
         else {
             usage();

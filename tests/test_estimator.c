@@ -609,6 +609,52 @@ done:
     return f;
 }
 
+/* sasnav_pair_estimate_first, then sasnav_pair_finish on the same data set
+ * again (nothing carried over in the estimator's caches), give
+ * sasnav_pair_estimate's estimate to the bit: the final stage runs from the
+ * same level-1 point. The first result has no final stage and costs less;
+ * a first result that is not finite is refused. */
+static void check_two_pass(void)
+{
+    sasnav_pose truth = {0.012, -0.008, 0.004};
+    sasnav_run *run = simulate(truth, 6);
+    if (!run) return;
+    sasnav_pair_opts po;
+    sasnav_pair_default_opts(&po);
+    if (reduced) po.k = po.i = 3; /* a final stage of its own */
+    po.nthreads = 1;
+    sasnav_pair *a = make_pair_opts(run, &po), *b = make_pair_opts(run, &po);
+    if (a && b) {
+        sasnav_pair_result full, first, fin;
+        CHECK_OK(sasnav_pair_estimate(a, &full));
+        CHECK_OK(sasnav_pair_estimate_first(b, &first));
+        CHECK(first.final_criterion == SASNAV_FINAL_NONE && full.final_criterion != SASNAV_FINAL_NONE,
+              "final criteria %s (first pass), %s (one pass)", sasnav_final_criterion_name(first.final_criterion),
+              sasnav_final_criterion_name(full.final_criterion));
+        CHECK(first.applications < full.applications, "first pass %ld applications, the whole %ld",
+              first.applications, full.applications);
+        CHECK_OK(sasnav_pair_set_data(b, sasnav_run_ping(run, 0), sasnav_run_ping(run, 1),
+                                      sasnav_ping_displacement(&run->nav[0], &run->nav[1])));
+        CHECK_OK(sasnav_pair_finish(b, &first, &fin));
+        CHECK(!memcmp(&fin.error, &full.error, sizeof fin.error) && fin.eta == full.eta &&
+                  fin.overlap == full.overlap && fin.verdict == full.verdict && fin.margin == full.margin &&
+                  fin.n_candidates == full.n_candidates && fin.chosen == full.chosen &&
+                  fin.final_criterion == full.final_criterion && fin.status == full.status,
+              "two passes (%.9g, %.9g, %.9g) eta %.9g %s, one pass (%.9g, %.9g, %.9g) eta %.9g %s", fin.error.x,
+              fin.error.y, fin.error.theta, fin.eta, sasnav_verdict_name(fin.verdict), full.error.x, full.error.y,
+              full.error.theta, full.eta, sasnav_verdict_name(full.verdict));
+        CHECK(fin.applications > first.applications, "costs not carried: %ld after %ld", fin.applications,
+              first.applications);
+        sasnav_pair_result bad = first;
+        bad.error.x = NAN;
+        CHECK(sasnav_pair_finish(b, &bad, &fin) == SASNAV_ERR_ARG, "a non-finite first estimate accepted");
+        CHECK(sasnav_pair_finish(b, NULL, &fin) == SASNAV_ERR_ARG, "a NULL first estimate accepted");
+    }
+    sasnav_pair_destroy(a);
+    sasnav_pair_destroy(b);
+    sasnav_run_free(run);
+}
+
 static void check_joint(void)
 {
     sasnav_pose truth = {0.012, -0.008, 0.004};
@@ -666,6 +712,7 @@ int main(void)
 {
     check_opts_rules();
     check_joint();
+    check_two_pass();
     check_chain_paths();
     if (!reduced) check_intervals();
     check_lags();

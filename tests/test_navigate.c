@@ -365,6 +365,41 @@ static void test_threads_over_pairs(void)
     sasnav_run_free(run);
 }
 
+/* The pairs' own speed-scaled offsets (opts.speed_lags 2) in two passes:
+ * every pair ends with a final stage (none is left at level 1), the
+ * first pass's candidates and margin stay with it, and the result is the
+ * same bits on one and two threads. */
+static void test_two_pass(void)
+{
+    sasnav_run *run = simulate(4, 0.20, 3e-3, 3e-3, 3e-3);
+    if (!run) return;
+    sasnav_navigation nav[2];
+    memset(nav, 0, sizeof nav);
+    for (int t = 0; t < 2; t++) {
+        sasnav_navigate_opts o;
+        sasnav_navigate_default_opts(&o);
+        o.pair.k = o.pair.i = 3; /* a final stage, cheaply */
+        o.pair.range_extent = 0.6;
+        o.speed_lags = 2;
+        o.nthreads = t + 1;
+        CHECK_OK(sasnav_navigate(run, &o, &nav[t]));
+    }
+    if (nav[0].n_pairs == 3 && nav[1].n_pairs == 3) {
+        for (int j = 0; j < 3; j++) {
+            const sasnav_pair_result *a = &nav[0].pairs[j].result, *b = &nav[1].pairs[j].result;
+            CHECK(a->final_criterion != SASNAV_FINAL_NONE, "pair %d left without its final stage", j);
+            CHECK(a->n_candidates >= 1 && a->margin > 0, "pair %d: the first pass's candidates lost", j);
+            CHECK(!memcmp(&a->error, &b->error, sizeof a->error) && a->eta == b->eta,
+                  "pair %d differs between 1 and 2 threads", j);
+        }
+        CHECK(!memcmp(nav[0].centroids, nav[1].centroids, sizeof(sasnav_pose) * 4),
+              "centroids differ between 1 and 2 threads");
+    }
+    sasnav_navigation_free(&nav[0]);
+    sasnav_navigation_free(&nav[1]);
+    sasnav_run_free(run);
+}
+
 /* Resuming (opts.done, the checkpoints' mechanism): records collected
  * through the progress callback of a first navigation, given back whole or
  * in part, give the same bits as estimating; records made with other
@@ -621,6 +656,7 @@ int main(void)
 {
     test_trust_point();
     test_threads_over_pairs();
+    test_two_pass();
     test_resume();
     test_bad_input();
     test_failed_pairs();

@@ -166,12 +166,13 @@ typedef struct {
  *          finite joint_eta_ratio) eta agrees with its estimate; ETA
  *          otherwise and on the GPU path (opts.gpu). */
 typedef enum {
+    SASNAV_FINAL_NONE = -1, /* in results: no final stage ran (sasnav_pair_estimate_first) */
     SASNAV_FINAL_ETA = 0,
     SASNAV_FINAL_JOINT = 1,
     SASNAV_FINAL_AUTO = 2
 } sasnav_final_criterion;
 
-/* "eta", "joint", "auto" ("unknown" otherwise). */
+/* "eta", "joint", "auto", "none" ("unknown" otherwise). */
 const char *sasnav_final_criterion_name(int criterion);
 /* The criterion named "eta", "joint" or "auto"; -1 for any other name. */
 int sasnav_final_criterion_parse(const char *name);
@@ -396,6 +397,22 @@ int sasnav_pair_estimate(sasnav_pair *pair, sasnav_pair_result *result);
  * error (e.g. a candidate of an earlier estimate chosen by
  * sasnav_navigate's joint resolution); margin INFINITY, one candidate. */
 int sasnav_pair_estimate_from(sasnav_pair *pair, sasnav_pose start, sasnav_pair_result *result);
+
+/* Two passes over a run (sasnav_navigate with the pairs' own speed-scaled
+ * offsets, docs/navigation.md "Two passes"):
+ * sasnav_pair_estimate_first is sasnav_pair_estimate without its final
+ * (level-2) stage: the chosen candidate's level-1 estimate, with the
+ * candidates, margin and verdict, its eta and overlap those of level 1
+ * (final_criterion SASNAV_FINAL_NONE; a preliminary verdict).
+ * sasnav_pair_finish then runs the final stage alone from first->error on
+ * the estimator's present data (set again, e.g. with other Tx-array
+ * offsets): the result carries first's candidates, choice, ambiguity,
+ * margin and costs (sasnav_pair_result_carry), and its verdict is judged
+ * on the final eta and overlap. sasnav_pair_estimate = the two on the
+ * same data. Errors: NULL arguments, no data, a first result without a
+ * finite estimate. */
+int sasnav_pair_estimate_first(sasnav_pair *pair, sasnav_pair_result *result);
+int sasnav_pair_finish(sasnav_pair *pair, const sasnav_pair_result *first, sasnav_pair_result *result);
 
 /* The estimator's grid (p's centroid frame). */
 const sasnav_grid *sasnav_pair_grid(const sasnav_pair *pair);

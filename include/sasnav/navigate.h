@@ -174,11 +174,17 @@ typedef struct {
                                  from the DVL aiding when the run has it and
                                  use_aiding is on (no extra cost; otherwise
                                  as 0); 2 = the same, and without a DVL
-                                 from the pairs' first estimates of surge,
-                                 every ok pair then estimated again (local
-                                 stages: about 1.8x the time; not with
-                                 reuse). The re-estimates of a reused
-                                 navigation take the DVL's offsets too */
+                                 from the pairs' own surge in two passes:
+                                 every pair first without its final stage
+                                 (sasnav_pair_estimate_first), the offsets
+                                 from their level-1 surges, then every
+                                 pair's final stage with them
+                                 (sasnav_pair_finish; about 1.1x the time
+                                 of one pass; not with reuse, not for runs
+                                 with channel offsets; docs/navigation.md,
+                                 "Two passes"). The re-estimates of a
+                                 reused navigation take the DVL's offsets
+                                 too */
     sasnav_pose aiding_bias_sigma; /* standard deviation of a constant error
                                  of the aiding per ping interval (surge m,
                                  sway m, yaw rad), estimated jointly with

@@ -1260,6 +1260,7 @@ const char *sasnav_final_criterion_name(int criterion)
     case SASNAV_FINAL_ETA: return "eta";
     case SASNAV_FINAL_JOINT: return "joint";
     case SASNAV_FINAL_AUTO: return "auto";
+    case SASNAV_FINAL_NONE: return "none";
     default: return "unknown";
     }
 }

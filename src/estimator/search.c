@@ -1060,13 +1060,15 @@ static void judge(const sasnav_pair_opts *o, sasnav_pair_result *res, int conver
     else res->verdict = SASNAV_VERDICT_OK;
 }
 
-/* The final stage and the result fields from the level-1 result r of the
- * chosen candidate. */
+/* The final stage (unless final_stage is 0) and the result fields from the
+ * level-1 result r of the chosen candidate. */
 static int finish(sasnav_pair *pr, double pc_spacing, refine_out *r, refine_out *sum,
-                  double t0, long apps0, int nglob, sasnav_pair_result *res)
+                  double t0, long apps0, int nglob, int final_stage, sasnav_pair_result *res)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
-    int rc = refine_final(pr, pc_spacing, r);
+    int rc = SASNAV_OK;
+    if (final_stage) rc = refine_final(pr, pc_spacing, r);
+    else r->final_criterion = SASNAV_FINAL_NONE;
     if (rc) return rc;
     sum->evaluations_final += r->evaluations_final;
     sum->evaluations_eta += r->evaluations_final;
@@ -1089,7 +1091,7 @@ static int finish(sasnav_pair *pr, double pc_spacing, refine_out *r, refine_out 
     res->error = r->error;
     res->displacement = (sasnav_pose){pr->nominal.x + r->error.x, pr->nominal.y + r->error.y,
                                       pr->nominal.theta + r->error.theta};
-    rc = sasnav_pair_eval(pr, r->error, PAIR_LEVELS - 1, 0, NULL, NULL, &res->overlap);
+    rc = sasnav_pair_eval(pr, r->error, final_stage ? PAIR_LEVELS - 1 : 1, 0, NULL, NULL, &res->overlap);
     if (rc) return rc;
     res->evaluations = 1 + nglob + res->evaluations_zeta + res->evaluations_eta + 1;
     res->applications = pr->applications - apps0;
@@ -1146,7 +1148,7 @@ static int refine_batch(sasnav_pair *pr, int n, refine_job *job)
     return SASNAV_OK;
 }
 
-int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
+static int estimate(sasnav_pair *pr, int final_stage, sasnav_pair_result *res)
 {
     if (!pr || !res) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
     memset(res, 0, sizeof *res);
@@ -1285,8 +1287,54 @@ int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res)
         if (k != win && cd->refined && cd->same_as < 0 && cd->eta / r[win].eta < res->margin)
             res->margin = cd->eta / r[win].eta;
     }
-    rc = finish(pr, pc_spacing, &r[win], &sum, t0, apps0, nglob, res);
+    rc = finish(pr, pc_spacing, &r[win], &sum, t0, apps0, nglob, final_stage, res);
     if (rc) return rc;
+    return SASNAV_OK;
+}
+
+int sasnav_pair_estimate(sasnav_pair *pr, sasnav_pair_result *res) { return estimate(pr, 1, res); }
+
+int sasnav_pair_estimate_first(sasnav_pair *pr, sasnav_pair_result *res) { return estimate(pr, 0, res); }
+
+int sasnav_pair_finish(sasnav_pair *pr, const sasnav_pair_result *first, sasnav_pair_result *res)
+{
+    if (!pr || !first || !res) return sasnav_set_error(SASNAV_ERR_ARG, "NULL argument");
+    if (!pr->ready) return sasnav_set_error(SASNAV_ERR_ARG, "estimator has no data (call set_data)");
+    sasnav_pose start = first->error;
+    if (!isfinite(start.x) || !isfinite(start.y) || !isfinite(start.theta))
+        return sasnav_set_error(SASNAV_ERR_ARG, "finish: the first estimate is not finite");
+    sasnav_pair_result one = *first;
+    memset(res, 0, sizeof *res);
+    double t0 = sasnav_now_seconds();
+    long apps0 = pr->applications;
+    /* the final stage from the first estimate, with its level-1 eta on
+     * the present data */
+    refine_out r, sum;
+    memset(&r, 0, sizeof r);
+    memset(&sum, 0, sizeof sum);
+    r.error = r.zeta_stage = start;
+    r.zeta = one.zeta;
+    r.zrc = one.status == SASNAV_ERR_NOT_CONVERGED ? SASNAV_ERR_NOT_CONVERGED : SASNAV_OK;
+    int rc = sasnav_pair_eval(pr, start, 1, 0, NULL, &r.eta, NULL);
+    if (rc) return rc;
+    rc = finish(pr, pair_pc_spacing(pr), &r, &sum, t0, apps0, 0, 1, res);
+    if (rc) return rc;
+    /* the first pass's stages, candidates and margin; the verdict again */
+    sasnav_pair_result_carry(&one, res);
+    res->global_stage = one.global_stage;
+    res->zeta_stage = one.zeta_stage;
+    res->zeta = one.zeta;
+    res->evaluations_global = one.evaluations_global;
+    res->evaluations_zeta = one.evaluations_zeta;
+    res->evaluations_eta += one.evaluations_eta;
+    res->seconds_global = one.seconds_global;
+    res->seconds_zeta = one.seconds_zeta;
+    res->seconds_eta += one.seconds_eta;
+    res->applications_global = one.applications_global;
+    res->applications_zeta = one.applications_zeta;
+    res->applications_eta += one.applications_eta;
+    if (res->status == SASNAV_OK && one.status == SASNAV_ERR_NOT_CONVERGED) res->status = one.status;
+    judge(sasnav_pair_options(pr), res, res->status != SASNAV_ERR_NOT_CONVERGED);
     return SASNAV_OK;
 }
 
@@ -1310,5 +1358,5 @@ int sasnav_pair_estimate_from(sasnav_pair *pr, sasnav_pose start, sasnav_pair_re
     res->candidates[0] = (sasnav_pair_candidate){r.error, NAN, r.zeta, r.eta, 1, -1};
     res->chosen = 0;
     res->margin = INFINITY;
-    return finish(pr, pc_spacing, &r, &sum, t0, apps0, 0, res);
+    return finish(pr, pc_spacing, &r, &sum, t0, apps0, 0, 1, res);
 }

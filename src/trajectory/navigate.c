@@ -154,6 +154,9 @@ typedef struct {
     uint64_t *keys;           /* per output pair: its key (part mode), or NULL */
     sasnav_cfloat *bufs;      /* streamed runs: two pings per worker, or NULL */
     pair_store pairs;         /* the pairs while the navigation runs, packed */
+    int two_pass;             /* opts.speed_lags 2: the first pass without the
+                                 final stage (sasnav_pair_estimate_first),
+                                 the offsets, then the final stages */
 } nav_ctx;
 
 /* Pair j, unpacked / packed again (pair_store.h). */
@@ -292,6 +295,8 @@ static const sasnav_pair_record *find_record(const nav_ctx *ctx, uint64_t key)
     return NULL;
 }
 
+static int take_result(const nav_ctx *ctx, sasnav_navigate_pair *np, int rc);
+
 /* Estimates pair (p, q) into *np (or takes it from ctx->done: *resumed
  * = 1). Returns a fatal code, else SASNAV_OK with np->status telling how
  * the pair went. *key: the pair's content key. */
@@ -370,9 +375,19 @@ static int estimate_pair(nav_ctx *ctx, int t, int j, int p, int q, sasnav_naviga
         rc = ctx->lags && !run->channel_offset
                  ? sasnav_pair_set_data_lags(estimator, dp, dq, np->nominal, ctx->lags[p], ctx->lags[q])
                  : sasnav_pair_set_data_run(estimator, run, p, q, dp, dq, np->nominal, ctx->tx_yaw);
-        if (!rc) rc = sasnav_pair_estimate(estimator, &np->result);
+        if (!rc) rc = ctx->two_pass ? sasnav_pair_estimate_first(estimator, &np->result)
+                                    : sasnav_pair_estimate(estimator, &np->result);
         if (rc) np->result.seconds = sasnav_now_seconds() - t0;
     }
+    return take_result(ctx, np, rc);
+}
+
+/* Pair np's estimate after the estimator returned rc: fatal codes are
+ * returned; otherwise an estimate that failed (or found no overlap)
+ * becomes the nominal displacement, flagged. */
+static int take_result(const nav_ctx *ctx, sasnav_navigate_pair *np, int rc)
+{
+    const sasnav_run *run = ctx->run;
     if (fatal_code(rc)) return rc;
     if (!rc && np->result.status == SASNAV_ERR_NO_OVERLAP) rc = SASNAV_ERR_NO_OVERLAP;
     if (rc) {
@@ -447,6 +462,17 @@ static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
     if (!(run->tx_lag >= 0) || !isfinite(run->tx_lag))
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: the run's Tx-array offset is invalid");
     return SASNAV_OK;
+}
+
+/* Whether the pairs' own speed-scaled offsets are wanted (opts.speed_lags
+ * 2, subspace, no DVL to take them from, one Tx per ping, no reused
+ * navigation): then the first pass stops before the final stage, and the
+ * final stages run once the offsets are known (docs/navigation.md, "Two
+ * passes"). */
+static int two_pass_mode(const sasnav_run *run, const sasnav_navigate_opts *o)
+{
+    int dvl = run->aiding && run->aiding->velocity && o->use_aiding;
+    return o->speed_lags == 2 && o->method == SASNAV_METHOD_SUBSPACE && !dvl && !o->reuse && !run->channel_offset;
 }
 
 /* Estimates all pairs into ctx->pairs (allocated). */
@@ -921,6 +947,49 @@ static void speed_lags(const nav_ctx *ctx, int from_dvl, double *lags)
     }
 }
 
+/* The second pass of two_pass: every one of the n pairs (the long
+ * baselines too) with a first estimate gets its
+ * final stage from it, on its data set again with the speed-scaled
+ * offsets (ctx->lags); its candidates and margin stay the first pass's.
+ * Concurrent over pairs like the first pass. */
+static int finish_pass(nav_ctx *ctx, int n)
+{
+    int stop = 0;
+    int *codes = calloc((size_t)(n > 0 ? n : 1), sizeof(int));
+    if (!codes) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+    char message[256] = "";
+#pragma omp parallel for schedule(dynamic, 1) num_threads(ctx->n_workers) if (ctx->n_workers > 1)
+    for (int j = 0; j < n; j++) {
+        int skip;
+#pragma omp atomic read
+        skip = stop;
+        sasnav_navigate_pair pair, *np = &pair;
+        get_pair(ctx, j, np);
+        if (skip || !usable(np)) continue;
+        int t = ctx->n_workers > 1 ? omp_get_thread_num() : 0;
+        sasnav_pair *est = ctx->estimators[t];
+        sasnav_pair_result first = np->result;
+        double t0 = sasnav_now_seconds();
+        int rc = set_pair_data(ctx, t, est, np->p, np->q, np->nominal);
+        if (!rc) rc = sasnav_pair_finish(est, &first, &np->result);
+        if (rc) np->result.seconds = first.seconds + sasnav_now_seconds() - t0;
+        rc = take_result(ctx, np, rc);
+        if (!rc) rc = put_pair(ctx, j, np);
+        if (rc) {
+            codes[j] = rc;
+#pragma omp critical(sasnav_navigate_failure)
+            if (!message[0]) snprintf(message, sizeof message, "%s", sasnav_last_error());
+#pragma omp atomic write
+            stop = 1;
+        }
+    }
+    int rc = SASNAV_OK;
+    for (int j = 0; j < n && !rc; j++)
+        if (codes[j]) rc = sasnav_set_error(codes[j], "%s", message);
+    free(codes);
+    return rc;
+}
+
 /* The second pass of opts.speed_lags = 2 and of the transmitters' turn
  * from the pairs: every consecutive pair whose first estimate is ok is
  * estimated again from it with the new layouts or offsets (local stages
@@ -1187,8 +1256,21 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
         ctx->lags = malloc(sizeof(double) * (size_t)n);
         if (!ctx->lags) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
         speed_lags(ctx, 0, ctx->lags);
-        rc = second_pass(ctx, 0);
+        double t = sasnav_now_seconds();
+        rc = ctx->two_pass ? finish_pass(ctx, out->n_pairs) : second_pass(ctx, 0);
         if (rc) return rc;
+        if (ctx->two_pass) {
+            /* the estimation's figures over both passes */
+            out->seconds_estimation += sasnav_now_seconds() - t;
+            out->pairs_per_second = out->seconds_estimation > 0 ? out->n_pairs / out->seconds_estimation : 0.0;
+            out->seconds_pairs = 0;
+            for (int j = 0; j < out->n_pairs; j++) {
+                sasnav_navigate_pair np;
+                get_pair(ctx, j, &np);
+                out->seconds_pairs += np.result.seconds;
+            }
+            out->seconds_per_pair = out->n_pairs > 0 ? out->seconds_pairs / out->n_pairs : 0.0;
+        }
     }
     rc = resolve_pairs(ctx, out);
     if (!rc) rc = pair_summary(ctx, out);
@@ -1240,7 +1322,14 @@ static int navigate_run(const sasnav_run *run, const sasnav_navigate_opts *opts,
     if (rc) return rc;
     nav_ctx ctx = {run, opts, NULL, 1, sasnav_now_seconds(),
                    run->array.n_rx > 1 ? 0.5 * fabs(run->array.rx_u[1] - run->array.rx_u[0]) : 0.025,
-                   NULL, NULL, NULL, 0, options_digest(run, opts), part, n_parts, NULL, NULL, {0, NULL, NULL}};
+                   NULL, NULL, NULL, 0, 0, part, n_parts, NULL, NULL, {0, NULL, NULL}, 0};
+    ctx.two_pass = two_pass_mode(run, opts);
+    ctx.digest = options_digest(run, opts);
+    if (ctx.two_pass) {
+        /* first estimates without the final stage: not those of one pass */
+        const int marker[1] = {2};
+        ctx.digest = hash_ints(ctx.digest, marker, 1);
+    }
     if (run->channel_offset) { /* the layout's phase-centre spacing */
         double pc[SASNAV_MAX_RX];
         phase_centres(run, pc);

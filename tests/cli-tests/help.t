@@ -289,8 +289,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       each ping: none (the run's offset), dvl (default:
                       from the aiding's DVL when the run has one, no
                       extra cost; otherwise none), pairs (the DVL, or
-                      without one the pairs' first surge estimates and a
-                      second estimate of every pair: ~1.8x the time)
+                      without one the pairs' own level-1 surges: every
+                      pair's final stage runs once the offsets are
+                      known; ~1.1x the time)
     --tx-yaw M        channels with transmitters of their own: the yaw
                       between transmission and reception that turns each
                       transmitter: auto (default: from the gyro when the
