@@ -79,7 +79,7 @@ static const char *help =
     "                    extra cost; otherwise none), pairs (the DVL, or\n"
     "                    without one the pairs' own level-1 surges: every\n"
     "                    pair's final stage runs once the offsets are\n"
-    "                    known; ~1.1x the time)\n"
+    "                    known: about the time of the default)\n"
     "  --tx-yaw M        channels with transmitters of their own: the yaw\n"
     "                    between transmission and reception that turns each\n"
     "                    transmitter: auto (default: from the gyro when the\n"

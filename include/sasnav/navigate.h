@@ -179,8 +179,8 @@ typedef struct {
                                  (sasnav_pair_estimate_first), the offsets
                                  from their level-1 surges, then every
                                  pair's final stage with them
-                                 (sasnav_pair_finish; about 1.1x the time
-                                 of one pass; not with reuse, not for runs
+                                 (sasnav_pair_finish; about the time of
+                                 one pass; not with reuse, not for runs
                                  with channel offsets; docs/navigation.md,
                                  "Two passes"). The re-estimates of a
                                  reused navigation take the DVL's offsets

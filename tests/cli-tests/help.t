@@ -291,7 +291,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       extra cost; otherwise none), pairs (the DVL, or
                       without one the pairs' own level-1 surges: every
                       pair's final stage runs once the offsets are
-                      known; ~1.1x the time)
+                      known: about the time of the default)
     --tx-yaw M        channels with transmitters of their own: the yaw
                       between transmission and reception that turns each
                       transmitter: auto (default: from the gyro when the
