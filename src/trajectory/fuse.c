@@ -208,3 +208,40 @@ int fuse_smooth_bias(int n, const sasnav_pose *m, const sasnav_pose *sm, const s
     free(u);
     return SASNAV_OK;
 }
+
+/* The derivative at node p of the polynomial through the points
+ * (s[i], c[i]), i = lo..hi (Lagrange's form; the nodes distinct). */
+static double interp_slope(const double *s, const double *c, int lo, int hi, int p)
+{
+    double d = 0;
+    for (int i = lo; i <= hi; i++) {
+        if (i == p) {
+            for (int m = lo; m <= hi; m++)
+                if (m != p) d += c[p] / (s[p] - s[m]);
+            continue;
+        }
+        double l = 1.0 / (s[i] - s[p]);
+        for (int m = lo; m <= hi; m++)
+            if (m != i && m != p) l *= (s[p] - s[m]) / (s[i] - s[m]);
+        d += c[i] * l;
+    }
+    return d;
+}
+
+void fuse_speed_excess(int n, const double *s, const double *c, const int *link, double *a)
+{
+    for (int p = 0; p < n; p++) {
+        int b0 = p, b1 = p; /* p's chain: pings b0..b1 */
+        while (b0 > 0 && link[b0 - 1]) b0--;
+        while (b1 + 1 < n && link[b1]) b1++;
+        int w = b1 - b0 + 1 < FUSE_SPEED_NODES ? b1 - b0 + 1 : FUSE_SPEED_NODES;
+        if (w < 2) {
+            a[p] = 0;
+            continue;
+        }
+        int lo = p - w / 2;
+        if (lo < b0) lo = b0;
+        if (lo + w - 1 > b1) lo = b1 - w + 1;
+        a[p] = interp_slope(s, c, lo, lo + w - 1, p);
+    }
+}
