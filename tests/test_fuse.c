@@ -10,13 +10,7 @@
  *   - the smoother equals the dense normal-equations solution of the same
  *     least squares (no Huber downweighting active), pulls an outlier
  *     estimate onto the aiding (Huber), and bridges a pair without an
- *     estimate from the aiding;
- *   - the pings' speed excess from the pairs' surges (fuse_speed_excess)
- *     equals the analytic derivative of a quartic along-track error at
- *     unequal nominal steps (exact for the five-point polynomial), of a
- *     cubic on a chain of four pings, and of a line on a chain of two;
- *     a ping on no ok pair gets 0, and no chain borrows a ping of another
- *     across a broken link. */
+ *     estimate from the aiding. */
 #include "sasnav/error.h"
 #include "testutil.h"
 #include "trajectory/fuse.h"
@@ -218,57 +212,8 @@ static void test_bias(void)
     CHECK(bias.x > 1e-4, "bias estimate %.3f mm", 1e3 * bias.x);
 }
 
-static double quartic(double x) { return 1e-3 + 2e-3 * x - 4e-3 * x * x + 1.5e-3 * x * x * x - 2e-4 * x * x * x * x; }
-static double quartic_d(double x) { return 2e-3 - 8e-3 * x + 4.5e-3 * x * x - 8e-4 * x * x * x; }
-
-static void test_speed(void)
-{
-    enum { NP = 12 };
-    double s[NP], c[NP], a[NP];
-    int link[NP - 1];
-    /* unequal steps: 0.2 m +- 15 % */
-    s[0] = 0;
-    for (int p = 1; p < NP; p++) s[p] = s[p - 1] + 0.2 * (1.0 + 0.15 * sin(1.7 * p));
-    for (int p = 0; p < NP; p++) c[p] = quartic(s[p]);
-    for (int j = 0; j < NP - 1; j++) link[j] = 1;
-    fuse_speed_excess(NP, s, c, link, a);
-    for (int p = 0; p < NP; p++) /* rounding of a 5-point Lagrange derivative: ~1e-15 */
-        CHECK(fabs(a[p] - quartic_d(s[p])) <= 1e-12, "quartic, ping %d: %.15g, analytic %.15g", p, a[p],
-              quartic_d(s[p]));
-    /* links 3 and 8 broken: chains 0..3 (four pings: a cubic is exact),
-     * 4..8 (five), 9..11 (three); an isolated ping needs two breaks */
-    link[3] = link[8] = 0;
-    double cub[NP];
-    for (int p = 0; p < NP; p++) cub[p] = p <= 3 ? 3e-3 * s[p] * s[p] * s[p] - 1e-3 * s[p] : c[p] + (p >= 9 ? 0.5 : 0);
-    fuse_speed_excess(NP, s, cub, link, a);
-    for (int p = 0; p <= 3; p++) {
-        double d = 9e-3 * s[p] * s[p] - 1e-3;
-        CHECK(fabs(a[p] - d) <= 1e-12, "cubic chain, ping %d: %.15g, analytic %.15g", p, a[p], d);
-    }
-    for (int p = 4; p <= 8; p++)
-        CHECK(fabs(a[p] - quartic_d(s[p])) <= 1e-12, "middle chain, ping %d: %.15g, analytic %.15g", p, a[p],
-              quartic_d(s[p]));
-    /* the last chain (three pings, a quadratic through the quartic's
-     * values): not exact, but the constant 0.5 added there must not leak */
-    for (int p = 9; p < NP; p++)
-        CHECK(fabs(a[p] - quartic_d(s[p])) <= 2e-3, "last chain, ping %d: %.6g, analytic %.6g", p, a[p],
-              quartic_d(s[p]));
-    /* a chain of two: the line's slope; a ping on no link: 0 */
-    for (int j = 0; j < NP - 1; j++) link[j] = 0;
-    link[5] = 1;
-    fuse_speed_excess(NP, s, c, link, a);
-    double line = (c[6] - c[5]) / (s[6] - s[5]);
-    CHECK(fabs(a[5] - line) <= 1e-15 && fabs(a[6] - line) <= 1e-15, "two pings: %.15g %.15g, slope %.15g", a[5],
-          a[6], line);
-    int zeros = 1;
-    for (int p = 0; p < NP; p++)
-        if (p != 5 && p != 6 && a[p] != 0) zeros = 0;
-    CHECK(zeros, "a ping on no ok pair got a speed");
-}
-
 int main(void)
 {
-    test_speed();
     test_choose();
     test_smooth();
     test_bias();

@@ -49,18 +49,4 @@ int fuse_smooth_bias(int n, const sasnav_pose *m, const sasnav_pose *sm, const s
                      const sasnav_pose *sa, sasnav_pose motion, double huber, sasnav_pose bias_sigma,
                      sasnav_pose *e, sasnav_pose *b);
 
-/* The relative speed excess a[p] of each of n pings (the derivative of
- * the along-track error c against the nominal arc length s; s strictly
- * increasing) where link[j] (n - 1 entries) says whether pings j and j + 1
- * are tied by an ok pair: along each unbroken chain of links, the
- * derivative at ping p of the polynomial through the FUSE_SPEED_NODES
- * nearest pings of its chain (fewer on a shorter chain; the window
- * shifted inwards at the chain's ends). The mean surge of the two pairs
- * around a ping (a central difference) underestimates a 1 m speed wave
- * sampled every 0.2 m by a quarter and errs by 1-2 mm of offset at a
- * run's ends; the quartic through five pings has under half its error
- * (docs/navigation.md, "Speeds from the pairs"). A ping on no link: 0. */
-#define FUSE_SPEED_NODES 5
-void fuse_speed_excess(int n, const double *s, const double *c, const int *link, double *a);
-
 #endif

@@ -903,52 +903,18 @@ static int pair_summary(nav_ctx *ctx, sasnav_navigation *out)
     return rc;
 }
 
-/* The pings' relative speed excess from the consecutive pairs' surge
- * motion errors (fuse_speed_excess): the pings' along-track errors (the
- * sums of the ok pairs' surges) against the nominal arc length. A ping on
- * no ok pair keeps a = 0. */
-static int pairs_speed(const nav_ctx *ctx, double *a)
-{
-    int n = ctx->run->n_pings;
-    double *s = malloc(sizeof(double) * (size_t)n * 2);
-    int *link = malloc(sizeof(int) * (size_t)(n > 1 ? n - 1 : 1));
-    if (!s || !link) {
-        free(s);
-        free(link);
-        return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-    }
-    double *c = s + n;
-    s[0] = c[0] = 0;
-    for (int j = 0; j + 1 < n; j++) {
-        sasnav_navigate_pair np;
-        get_pair(ctx, j, &np);
-        link[j] = np.first_verdict == SASNAV_VERDICT_OK && fabs(np.nominal.x) > 0 &&
-                  isfinite(np.result.error.x);
-        s[j + 1] = s[j] + (link[j] ? fabs(np.nominal.x) : 1.0);
-        c[j + 1] = c[j] + (link[j] ? np.result.error.x : 0.0);
-    }
-    fuse_speed_excess(n, s, c, link, a);
-    free(s);
-    free(link);
-    return SASNAV_OK;
-}
-
 /* Per-ping Tx-array offsets scaled by the vehicle's speed at each ping
  * (the offset is speed x two-way delay): lag_p = tx_lag (1 + a_p), a_p the
  * relative speed excess. From the DVL (the mean of the two intervals
  * around the ping) when `from_dvl`, else from the consecutive pairs'
- * surge motion errors (pairs_speed). */
-static int speed_lags(const nav_ctx *ctx, int from_dvl, double *lags)
+ * surge motion errors (their mean over the nominal step). */
+static void speed_lags(const nav_ctx *ctx, int from_dvl, double *lags)
 {
     const sasnav_run *run = ctx->run;
     int n = run->n_pings;
     const sasnav_aiding *ad = run->aiding;
-    if (!from_dvl) {
-        int rc = pairs_speed(ctx, lags);
-        if (rc) return rc;
-    }
     for (int p = 0; p < n; p++) {
-        double a = from_dvl ? 0.0 : lags[p];
+        double a = 0;
         if (from_dvl) {
             double dt0 = p > 0 ? ad->time[p] - ad->time[p - 1] : 0;
             double dt1 = p + 1 < n ? ad->time[p + 1] - ad->time[p] : 0;
@@ -964,11 +930,21 @@ static int speed_lags(const nav_ctx *ctx, int from_dvl, double *lags)
                 w += 1;
             }
             a = w > 0 ? sum / w : 0.0;
+        } else {
+            double sum = 0, w = 0;
+            for (int j = p - 1; j <= p; j++) {
+                if (j < 0 || j >= n - 1) continue;
+                sasnav_navigate_pair np;
+                get_pair(ctx, j, &np);
+                if (np.first_verdict != SASNAV_VERDICT_OK || !(fabs(np.nominal.x) > 0)) continue;
+                sum += np.result.error.x / fabs(np.nominal.x);
+                w += 1;
+            }
+            a = w > 0 ? sum / w : 0.0;
         }
         if (!isfinite(a) || a < -0.5) a = 0; /* nonsense speeds: keep the nominal offset */
         lags[p] = run->tx_lag * (1.0 + a);
     }
-    return SASNAV_OK;
 }
 
 /* The second pass of two_pass: every one of the n pairs (the long
@@ -1241,8 +1217,7 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
     if (o->speed_lags && o->method == SASNAV_METHOD_SUBSPACE && dvl && !run->channel_offset) {
         ctx->lags = malloc(sizeof(double) * (size_t)n);
         if (!ctx->lags) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-        int r = speed_lags(ctx, 1, ctx->lags);
-        if (r) return r;
+        speed_lags(ctx, 1, ctx->lags);
     }
     if (run->channel_offset && run->aiding && run->aiding->yaw_rate && o->use_aiding && o->tx_yaw == 1 &&
         o->method == SASNAV_METHOD_SUBSPACE) {
@@ -1280,8 +1255,7 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
         if (rc) return rc;
         ctx->lags = malloc(sizeof(double) * (size_t)n);
         if (!ctx->lags) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-        rc = speed_lags(ctx, 0, ctx->lags);
-        if (rc) return rc;
+        speed_lags(ctx, 0, ctx->lags);
         double t = sasnav_now_seconds();
         rc = ctx->two_pass ? finish_pass(ctx, out->n_pairs) : second_pass(ctx, 0);
         if (rc) return rc;
