@@ -18,6 +18,7 @@ static const char *help =
     "usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]\n"
     "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
     "                       [--cross-extent M] [--range-extent M] [--eta-max E] [--final C]\n"
+    "                       [--search-grid G]\n"
     "                       [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]\n"
     "                       [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]\n"
     "                       [--threads N] [--gpu] [--json] [--checkpoint FILE]\n"
@@ -70,6 +71,8 @@ static const char *help =
     "  --final C         each pair's final-stage criterion: auto (default), eta\n"
     "                    or joint (see 'sasnav pair --help')\n"
     "  --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)\n"
+    "  --search-grid G   grid of each pair's search stages: auto (default),\n"
+    "                    fine or coarse (see 'sasnav pair --help')\n"
     "  --no-aiding       ignore the run's aiding measurements\n"
     "  --no-resolve      take each pair's own estimate (no joint resolution, no\n"
     "                    fusion: the paper's method)\n"
@@ -77,9 +80,9 @@ static const char *help =
     "                    each ping: none (the run's offset), dvl (default:\n"
     "                    from the aiding's DVL when the run has one, no\n"
     "                    extra cost; otherwise none), pairs (the DVL, or\n"
-    "                    without one the pairs' own level-1 surges: every\n"
-    "                    pair's final stage runs once the offsets are\n"
-    "                    known: about the time of the default)\n"
+    "                    without one the pairs' own surges before their final\n"
+    "                    stage: every pair's final stage runs once the\n"
+    "                    offsets are known: about the time of the default)\n"
     "  --tx-yaw M        channels with transmitters of their own: the yaw\n"
     "                    between transmission and reception that turns each\n"
     "                    transmitter: auto (default: from the gyro when the\n"
@@ -498,7 +501,7 @@ int cmd_navigate(int argc, char **argv)
         {"interleave", required_argument, 0, 'G'}, {"closed", no_argument, 0, 'Z'},
         {"keep-length", no_argument, 0, 'K'}, {"align-heading", no_argument, 0, 'H'},
         {"gpu", no_argument, 0, 'g'},        {"eta-max", required_argument, 0, 'e'},
-        {"final", required_argument, 0, 'c'},
+        {"final", required_argument, 0, 'c'},  {"search-grid", required_argument, 0, 'P'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -513,7 +516,7 @@ int cmd_navigate(int argc, char **argv)
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         /* Options of the pair navigation alone (refused with --virtual-array). */
-        if (strchr("mLyfAFUNBSRMCge", opt)) n_general++;
+        if (strchr("mLyfAFUNBSRMCgeP", opt)) n_general++;
         have_cross |= opt == 'X';
         have_range |= opt == 'E';
         switch (opt) {
@@ -575,6 +578,11 @@ int cmd_navigate(int argc, char **argv)
             break;
         case 'A': anchor_truth = 1; break;
         case 'F': no.pair.fix_yaw = 1; break;
+        case 'P':
+            no.pair.search_grid = sasnav_search_grid_parse(optarg);
+            if (no.pair.search_grid < 0)
+                return cli_usage("navigate", "--search-grid needs auto, fine or coarse");
+            break;
         case 'g': no.pair.gpu = 1; break;
         case 'X':
             if (cli_parse_double(optarg, &no.pair.cross_extent) || !(no.pair.cross_extent > 0))

@@ -57,6 +57,27 @@ typedef enum {
     SASNAV_NORM_NONE = 3
 } sasnav_norm;
 
+/* The grid of the search stages before the final one (opts.search_grid;
+ * docs/estimator.md, "The search stages on the coarse grid"). The final
+ * stage and the overlap check are at full pixels whatever this says, and
+ * without a final stage (k, i equal to coarse_k, coarse_i) so is the
+ * search. */
+typedef enum {
+    SASNAV_SEARCH_AUTO = 0,  /* COARSE on speckle-like scenes (the contrast of p's
+                                reconstruction at most joint_contrast_max), FINE
+                                on a few bright reflectors (default) */
+    SASNAV_SEARCH_FINE = 1,  /* full pixels (every scene before this option) */
+    SASNAV_SEARCH_COARSE = 2 /* the global stage's coarse pixels: about 1.5x faster
+                                on seabed pairs, the same final estimates to 0.1
+                                mm rms there; on the tank's compact scene it
+                                slips (tests/test_tank_pairs.c) */
+} sasnav_search_grid;
+
+/* "auto", "fine", "coarse" ("unknown" otherwise). */
+const char *sasnav_search_grid_name(int grid);
+/* The grid named "auto", "fine" or "coarse"; -1 for any other name. */
+int sasnav_search_grid_parse(const char *name);
+
 typedef struct {
     int k;                 /* CGLS iterations of the final stage (default 8; the
                               paper used 5) */
@@ -75,6 +96,9 @@ typedef struct {
                               1.6 m in paper-pair) */
     double pixel;          /* m, pixel size (default: min(D/4, c/(4B))) */
     double coarse_pixel;   /* m, pixel of the global stage (default 2 * pixel) */
+    int search_grid;       /* sasnav_search_grid: the grid of the search
+                              stages (valley scan, zeta stage, first eta
+                              stage, slip check); default AUTO */
     double blur;           /* m, range sigma of the Gaussian blur of the global
                               stage's moduli (default 0.075) */
     double blur_cross;     /* m, along-track sigma of that blur (default 0: the

@@ -34,6 +34,7 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->cross_extent = 0.0;
     o->pixel = 0.0;
     o->coarse_pixel = 0.0;
+    o->search_grid = SASNAV_SEARCH_AUTO;
     o->blur = 0.075;
     o->verdict_eta_max = 0.6;
     o->verdict_margin_min = 1.15;
@@ -289,6 +290,8 @@ int sasnav_pair_opts_check(const sasnav_pair_opts *o)
         OPT_FAIL("final_criterion = %d must be SASNAV_FINAL_ETA, _JOINT or _AUTO", o->final_criterion);
     if (!(o->joint_shift_max >= 0) || !isfinite(o->joint_shift_max))
         OPT_FAIL("joint_shift_max %g must be finite and >= 0", o->joint_shift_max);
+    if (o->search_grid < SASNAV_SEARCH_AUTO || o->search_grid > SASNAV_SEARCH_COARSE)
+        OPT_FAIL("search_grid %d is not a sasnav_search_grid", o->search_grid);
     if (!(o->joint_contrast_max >= 0)) OPT_FAIL("joint_contrast_max %g must be >= 0", o->joint_contrast_max);
     if (!(o->joint_eta_ratio >= 1))
         OPT_FAIL("joint_eta_ratio %g must be >= 1 (inf: never reject the joint estimate)", o->joint_eta_ratio);
@@ -1182,6 +1185,13 @@ int pair_workers(sasnav_pair *pr, int want, sasnav_pair **w)
     return n;
 }
 
+void pair_forget(sasnav_pair *pr, int level)
+{
+    if (!pr || level < 0 || level >= PAIR_LEVELS) return;
+    pr->level[level].n_kept = pr->level[level].next_kept = 0;
+    pr->level[level].last_valid = 0;
+}
+
 void pair_twin_merge(sasnav_pair *pr)
 {
     if (!pr) return;
@@ -1270,6 +1280,24 @@ int sasnav_final_criterion_parse(const char *name)
     if (!name) return -1;
     for (int c = SASNAV_FINAL_ETA; c <= SASNAV_FINAL_AUTO; c++)
         if (!strcmp(name, sasnav_final_criterion_name(c))) return c;
+    return -1;
+}
+
+const char *sasnav_search_grid_name(int grid)
+{
+    switch (grid) {
+    case SASNAV_SEARCH_AUTO: return "auto";
+    case SASNAV_SEARCH_FINE: return "fine";
+    case SASNAV_SEARCH_COARSE: return "coarse";
+    default: return "unknown";
+    }
+}
+
+int sasnav_search_grid_parse(const char *name)
+{
+    if (!name) return -1;
+    for (int g = SASNAV_SEARCH_AUTO; g <= SASNAV_SEARCH_COARSE; g++)
+        if (!strcmp(name, sasnav_search_grid_name(g))) return g;
     return -1;
 }
 

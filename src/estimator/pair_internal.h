@@ -149,4 +149,9 @@ void pair_twin_merge(sasnav_pair *pr);
  * a worker stops at its first error, the others go on. */
 int pair_batch(sasnav_pair *pr, int n, int (*fn)(sasnav_pair *w, int j, void *ctx), void *ctx);
 
+/* Forget the values a level keeps (and its last psi): after a batch whose
+ * points pr evaluated only in part (the rest on twins), so that what pr
+ * evaluates next costs the same whatever the number of workers. */
+void pair_forget(sasnav_pair *pr, int level);
+
 #endif

@@ -1,16 +1,19 @@
 /* The search for the displacement (paper Section III-A, procedure 1-3, and
  * docs/estimator.md, "Search"):
  *   0. global stage: the image shift of q's content against p's fixes a
- *      1-D valley of hypotheses; zeta (level 1) is scanned along it, its
- *      local minima are the candidates, the best is refined by BOBYQA
- *      (NLopt) on zeta at level 0;
- *   1. zeta stage (level 1): Levenberg-Marquardt on the residual vector
+ *      1-D valley of hypotheses; zeta is scanned along it, its local minima
+ *      are the candidates, the best is refined by BOBYQA (NLopt) on zeta at
+ *      level 0;
+ *   1. zeta stage: Levenberg-Marquardt on the residual vector
  *      |psi_p| - |psi_q| (Broyden-updated Jacobian, a parabola along each
  *      step);
- *   2. eta stage: the same on psi_p - psi_q at level 1, from the zeta
- *      result and one sway fringe (lambda/2) either side when eta is lower
- *      there; then at level 2 (final k, i) a Newton step on the quadratic
- *      model of eta measured from ten residual vectors, and one correction.
+ *   2. eta stage: the same on psi_p - psi_q, from the zeta result and one
+ *      sway fringe (lambda/2) either side when eta is lower there; then at
+ *      level 2 (full pixels, final k, i) Newton steps on the quadratic
+ *      model of eta measured from ten residual vectors.
+ * The scan and stages 1-2 before level 2 run at the search level
+ * (search_level: the coarse grid of level 0 or the full pixels of level 1,
+ * opts.search_grid).
  * Steps and bounds derive from the geometry: phase-centre spacing, range and
  * wavelength. Why each choice: docs/estimator.md, "Search cost". */
 #include "pair_internal.h"
@@ -22,12 +25,22 @@
 #include <stdlib.h>
 #include <string.h>
 
-#ifndef SCAN_LEVEL
-#define SCAN_LEVEL 1
-#endif
 #define HW10 ((sasnav_pose){10.0, 10.0, 10.0})
 /* zeta ratio of the scan's two best minima above which both are refined */
 #define AMBIGUOUS 0.8
+
+/* The level of the search stages (valley scan, zeta stage, first eta stage,
+ * slip check): the coarse grid (0) or full pixels (1) as opts.search_grid
+ * says, AUTO by the contrast of p's full-pixel reconstruction; full pixels
+ * where there is no final stage (the search's result is then the
+ * estimate). The overlap check stays at full pixels (level 1) either way. */
+static int search_level(const sasnav_pair *pr)
+{
+    const sasnav_pair_opts *o = sasnav_pair_options(pr);
+    if (o->k == o->coarse_k && o->i == o->coarse_i) return 1;
+    if (o->search_grid == SASNAV_SEARCH_AUTO) return pair_contrast(pr) <= o->joint_contrast_max ? 0 : 1;
+    return o->search_grid == SASNAV_SEARCH_COARSE ? 0 : 1;
+}
 
 typedef struct {
     sasnav_pair *pr;
@@ -626,7 +639,8 @@ static int scan_item(sasnav_pair *w, int j, void *ctx)
 {
     scan_job *b = ctx;
     int k = b->at[j];
-    return sasnav_pair_eval(w, b->es[k], SCAN_LEVEL, 0, &b->zs[k], NULL, NULL);
+    return sasnav_pair_eval(w, b->es[k], search_level(w), 0, &b->zs[k], NULL,
+                            NULL);
 }
 
 /* The global stage's shift at yaw hypothesis j (pair_batch): the shift
@@ -758,6 +772,9 @@ static int global_stage(sasnav_pair *pr, double pc_spacing, sasnav_pose *best, i
     /* zeta at the scan's points in the box, as many at once as the
      * estimator has workers (the same values either way) */
     rc = pair_batch(pr, job.n, scan_item, &job);
+    /* The refinement below starts at a scanned point: kept on pr only when
+     * pr scanned it (one worker), so forget the scan for equal counts. */
+    pair_forget(pr, search_level(pr));
     free(job.at);
     if (rc) {
         free(zs);
@@ -843,7 +860,7 @@ typedef struct {
     int joint_rejected;  /* the joint stage ran and eta rejected its estimate */
 } refine_out;
 
-/* Stage 1 and the level-1 part of stage 2 from `start` (a global-stage
+/* Stage 1 and the search-level part of stage 2 from `start` (a global-stage
  * candidate). */
 static int refine(sasnav_pair *pr, sasnav_pose start, double pc_spacing, refine_out *out)
 {
@@ -853,13 +870,13 @@ static int refine(sasnav_pair *pr, sasnav_pose start, double pc_spacing, refine_
     memset(out, 0, sizeof *out);
     double t = sasnav_now_seconds();
     long apps = sasnav_pair_applications(pr);
-    /* Zeta stage (level 1: full pixels, coarse iterations): steps of a
+    /* Zeta stage (search level, coarse iterations): steps of a
      * fifth of a phase-centre spacing in surge and sway, and the yaw that
      * moves the scene by as much at the grid's range. */
     /* With a surge prior the stage minimises zeta times its factor, so that
      * it stays with the candidate the global stage chose; the zeta reported
      * is the data's. */
-    stage_ctx ctx = {.pr = pr, .level = 1, .use_prior = 1};
+    stage_ctx ctx = {.pr = pr, .level = search_level(pr), .use_prior = 1};
     sasnav_pose zstep = {0.2 * pc_spacing, 0.2 * pc_spacing, 0.2 * pc_spacing / range};
     sasnav_pose zbest;
     double zval;
@@ -875,7 +892,7 @@ static int refine(sasnav_pair *pr, sasnav_pose start, double pc_spacing, refine_
     t = sasnav_now_seconds();
     apps = sasnav_pair_applications(pr);
 
-    /* Eta stage, first at level 1 then at level 2 (final k, i): units of
+    /* Eta stage, first at the search level then at level 2 (final k, i): units of
      * lambda/40 in sway (bounds +-lambda/4: one fringe), a 25th of the
      * phase-centre spacing in surge and twice the matching yaw (bounds +-10
      * units). The fringes either side of the zeta result are tried too and
@@ -891,7 +908,7 @@ static int refine(sasnav_pair *pr, sasnav_pose start, double pc_spacing, refine_
         s0.y += (fringe == 0 ? 0.0 : fringe == 1 ? -0.5 : 0.5) * lambda;
         if (fringe > 0) {
             double e0;
-            rc = sasnav_pair_eval(pr, s0, 1, 0, NULL, &e0, NULL);
+            rc = sasnav_pair_eval(pr, s0, ctx.level, 0, NULL, &e0, NULL);
             nevals++;
             if (rc) return rc;
             if (!(e0 < fbest)) continue;
@@ -918,7 +935,7 @@ static int refine(sasnav_pair *pr, sasnav_pose start, double pc_spacing, refine_
     return SASNAV_OK;
 }
 
-/* The level-1 eta stage alone from `start` (the slip check's neighbours of
+/* The search-level eta stage alone from `start` (the slip check's neighbours of
  * the chosen candidate). */
 static int refine_eta(sasnav_pair *pr, sasnav_pose start, double pc_spacing, refine_out *out)
 {
@@ -927,7 +944,7 @@ static int refine_eta(sasnav_pair *pr, sasnav_pose start, double pc_spacing, ref
     memset(out, 0, sizeof *out);
     double t = sasnav_now_seconds();
     long apps = sasnav_pair_applications(pr);
-    stage_ctx ctx = {.pr = pr, .level = 1, .use_eta = 1};
+    stage_ctx ctx = {.pr = pr, .level = search_level(pr), .use_eta = 1};
     sasnav_pose estep = {pc_spacing / 25.0, lambda / 40.0, 2.0 * pc_spacing / 25.0 / range};
     sasnav_pose b = start;
     double f = HUGE_VAL;
@@ -944,7 +961,7 @@ static int refine_eta(sasnav_pair *pr, sasnav_pose start, double pc_spacing, ref
     return SASNAV_OK;
 }
 
-/* The final stage at level 2 (k, i) from the level-1 eta result in `out`:
+/* The final stage at level 2 (k, i) from the search-level eta result in `out`:
  * Newton steps on the measured quadratic model, in half the eta units,
  * differences of half a unit (0.25 mm of surge, 31 microns of sway, 5e-5
  * rad), until a step is below 0.1 unit (50 microns of surge) or after 4
@@ -978,7 +995,7 @@ static int refine_final(sasnav_pair *pr, double pc_spacing, refine_out *out)
     }
     out->final_criterion = joint ? SASNAV_FINAL_JOINT : SASNAV_FINAL_ETA;
     if (joint) {
-        /* The joint misfit's Newton stage from the level-1 result, then eta
+        /* The joint misfit's Newton stage from the search-level result, then eta
          * at (k, i) at its minimum (the verdict's eta bound and the overlap
          * are eta's). With a finite joint_eta_ratio (default: none), kept
          * only when eta there is at most that ratio of eta at the start,
@@ -1061,7 +1078,7 @@ static void judge(const sasnav_pair_opts *o, sasnav_pair_result *res, int conver
 }
 
 /* The final stage (unless final_stage is 0) and the result fields from the
- * level-1 result r of the chosen candidate. */
+ * search-level result r of the chosen candidate. */
 static int finish(sasnav_pair *pr, double pc_spacing, refine_out *r, refine_out *sum,
                   double t0, long apps0, int nglob, int final_stage, sasnav_pair_result *res)
 {
@@ -1110,7 +1127,7 @@ static double pair_pc_spacing(const sasnav_pair *pr)
 }
 
 /* Candidates refined side by side (pair_batch): item j refines from
- * start[j] into out[j], through the zeta and level-1 eta stages (refine)
+ * start[j] into out[j], through the zeta and search-level eta stages (refine)
  * or the eta stage alone (refine_eta, the slip check's points). Each
  * candidate's stages are the same on the estimator or on a twin (the same
  * bits), so only the wall time depends on the workers. */
@@ -1190,7 +1207,7 @@ static int estimate(sasnav_pair *pr, int final_stage, sasnav_pair_result *res)
     /* The candidates: the scan's lowest minimum (from the global stage's
      * local refinement), the second lowest, and any further one whose
      * score is within AMBIGUOUS of the lowest, each through the zeta and
-     * level-1 eta stages; the lowest eta wins and alone goes on to the
+     * search-level eta stages; the lowest eta wins and alone goes on to the
      * final stage. The other candidates' eta tells how clearly the data
      * chose (the margin of the verdict). Without a global stage the prior
      * is the only candidate. */
@@ -1307,7 +1324,7 @@ int sasnav_pair_finish(sasnav_pair *pr, const sasnav_pair_result *first, sasnav_
     memset(res, 0, sizeof *res);
     double t0 = sasnav_now_seconds();
     long apps0 = pr->applications;
-    /* the final stage from the first estimate, with its level-1 eta on
+    /* the final stage from the first estimate, with its search-level eta on
      * the present data */
     refine_out r, sum;
     memset(&r, 0, sizeof r);
@@ -1315,7 +1332,7 @@ int sasnav_pair_finish(sasnav_pair *pr, const sasnav_pair_result *first, sasnav_
     r.error = r.zeta_stage = start;
     r.zeta = one.zeta;
     r.zrc = one.status == SASNAV_ERR_NOT_CONVERGED ? SASNAV_ERR_NOT_CONVERGED : SASNAV_OK;
-    int rc = sasnav_pair_eval(pr, start, 1, 0, NULL, &r.eta, NULL);
+    int rc = sasnav_pair_eval(pr, start, search_level(pr), 0, NULL, &r.eta, NULL);
     if (rc) return rc;
     rc = finish(pr, pair_pc_spacing(pr), &r, &sum, t0, apps0, 0, 1, res);
     if (rc) return rc;

@@ -219,6 +219,10 @@ static uint64_t options_digest(const sasnav_run *run, const sasnav_navigate_opts
         const int pi[9] = {po->k, po->i, po->coarse_k, po->coarse_i, (int)po->norm, po->fix_yaw,
                            po->global_stage, po->max_evaluations, po->op.pad_samples};
         h = hash_ints(h, pi, 9);
+        /* the search's grid (keys of earlier versions were made with the
+         * full-pixel search, SASNAV_SEARCH_FINE, and stay theirs) */
+        const int gr[1] = {po->search_grid};
+        if (po->search_grid != SASNAV_SEARCH_FINE) h = hash_ints(h, gr, 1);
         const double pd[31] = {po->tikhonov, po->range_extent, po->cross_extent, po->pixel,
                                po->coarse_pixel, po->blur, po->blur_cross, po->prior.x, po->prior.y,
                                po->prior.theta, po->box.x, po->box.y, po->box.theta, po->yaw_sigma,

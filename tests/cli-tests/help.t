@@ -101,7 +101,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   usage: sasnav pair run.h5 [--p I --q J] [--json] [--k K] [--i I]
                      [--prior S,W,Y] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]
                      [--cross-extent M] [--range-extent M]
-                     [--no-global] [--subintervals N] [--eta-max E] [--final C]
+                     [--no-global] [--search-grid G] [--subintervals N]
+                     [--eta-max E] [--final C]
                      [--range R] [--lag-model fixed|motion] [--threads N] [--gpu]
   
   Estimates the motion error (displacement minus nominal) of ping q relative
@@ -120,6 +121,11 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       the global stage's candidates one phase-centre spacing
                       apart, which look alike on compact scenes at a squint
     --no-global       skip the global stage (local search from the prior)
+    --search-grid G   grid of the search stages before the final one: auto
+                      (default: coarse on a speckle-like scene, fine on a
+                      few bright reflectors), fine (full pixels) or coarse
+                      (the global stage's; 1.5x faster on seabed pairs;
+                      docs/estimator.md)
     --box S,W,Y       half-widths of the search box around the prior (m, m,
                       rad; default 0.06, 0.035 and the grating-lobe-safe yaw)
     --range R         centre range of the estimation grid (default: the run's
@@ -230,6 +236,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]
                          [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]
                          [--cross-extent M] [--range-extent M] [--eta-max E] [--final C]
+                         [--search-grid G]
                          [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]
                          [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]
                          [--threads N] [--gpu] [--json] [--checkpoint FILE]
@@ -282,6 +289,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --final C         each pair's final-stage criterion: auto (default), eta
                       or joint (see 'sasnav pair --help')
     --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)
+    --search-grid G   grid of each pair's search stages: auto (default),
+                      fine or coarse (see 'sasnav pair --help')
     --no-aiding       ignore the run's aiding measurements
     --no-resolve      take each pair's own estimate (no joint resolution, no
                       fusion: the paper's method)
@@ -289,9 +298,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       each ping: none (the run's offset), dvl (default:
                       from the aiding's DVL when the run has one, no
                       extra cost; otherwise none), pairs (the DVL, or
-                      without one the pairs' own level-1 surges: every
-                      pair's final stage runs once the offsets are
-                      known: about the time of the default)
+                      without one the pairs' own surges before their final
+                      stage: every pair's final stage runs once the
+                      offsets are known: about the time of the default)
     --tx-yaw M        channels with transmitters of their own: the yaw
                       between transmission and reception that turns each
                       transmitter: auto (default: from the gyro when the

@@ -264,6 +264,7 @@ class PairOpts(Structure):  # estimator.h
         ("cross_extent", c_double),
         ("pixel", c_double),
         ("coarse_pixel", c_double),
+        ("search_grid", c_int),  # sasnav_search_grid
         ("blur", c_double),
         ("blur_cross", c_double),
         ("prior", Pose),
