@@ -282,6 +282,7 @@ int cmd_pair(int argc, char **argv)
         json_object_set_new(root, "eta", json_real(r0->eta));
         json_object_set_new(root, "final_criterion", json_string(sasnav_final_criterion_name(r0->final_criterion)));
         json_object_set_new(root, "joint_rejected", json_boolean(r0->joint_rejected));
+        json_object_set_new(root, "search_grid", json_string(sasnav_search_grid_name(r0->search_grid)));
         json_object_set_new(root, "overlap", json_real(r0->overlap));
         json_object_set_new(root, "ambiguity", json_real(r0->ambiguity));
         json_object_set_new(root, "evaluations", json_integer(r0->evaluations));
@@ -371,11 +372,13 @@ int cmd_pair(int argc, char **argv)
                r->evaluations_eta, r->applications, r->seconds,
                r->status == SASNAV_OK ? "converged" : sasnav_strerror(r->status));
         printf("time per stage: global %.2f s (%ld applications), zeta %.2f s (%ld), eta %.2f s (%ld), "
-               "final %.2f s (%ld, %d evaluations, criterion %s)\n",
+               "final %.2f s (%ld, %d evaluations, criterion %s); search grid %s\n",
                r->seconds_global, r->applications_global, r->seconds_zeta, r->applications_zeta,
                r->seconds_eta, r->applications_eta, r->seconds_final, r->applications_final,
-               r->evaluations_final, r->joint_rejected ? "eta, the joint misfit's estimate rejected"
-                                                       : sasnav_final_criterion_name(r->final_criterion));
+               r->evaluations_final,
+               r->joint_rejected ? "eta, the joint misfit's estimate rejected"
+                                 : sasnav_final_criterion_name(r->final_criterion),
+               sasnav_search_grid_name(r->search_grid));
         for (int kc = 0; kc < r->n_candidates; kc++) {
             const sasnav_pair_candidate *c = &r->candidates[kc];
             char scan_s[32];
@@ -383,7 +386,7 @@ int cmd_pair(int argc, char **argv)
             printf("candidate %d%s  surge %+8.3f mm  sway %+9.4f mm  yaw %+.4e rad  zeta(scan) %s", kc,
                    kc == r->chosen ? "*" : " ", 1e3 * c->error.x, 1e3 * c->error.y, c->error.theta,
                    scan_s);
-            if (c->refined) printf("  eta(level 1) %.4f", c->eta);
+            if (c->refined) printf("  eta(search) %.4f", c->eta);
             if (c->same_as >= 0) printf("  (= candidate %d)", c->same_as);
             printf("\n");
         }

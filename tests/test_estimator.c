@@ -71,6 +71,9 @@ static void check_recovery(sasnav_pose truth, uint64_t seed)
         CHECK(fabs(r.error.theta - truth.theta) <= by, "yaw error %.2e rad", r.error.theta - truth.theta);
         CHECK(r.ambiguity >= 0 && r.ambiguity <= 1, "ambiguity %g outside [0, 1]", r.ambiguity);
         CHECK(r.verdict == SASNAV_VERDICT_OK, "verdict %s", sasnav_verdict_name(r.verdict));
+        /* a speckle-like seabed (contrast ~2): AUTO searches on the coarse grid */
+        CHECK(r.search_grid == SASNAV_SEARCH_COARSE, "search grid %s",
+              sasnav_search_grid_name(r.search_grid));
         CHECK(r.n_candidates >= 1 && r.chosen >= 0 && r.candidates[r.chosen].refined,
               "%d candidates, chosen %d", r.n_candidates, r.chosen);
         /* The stage accounting covers the whole estimate: only the closing
@@ -277,6 +280,66 @@ static void check_verdict(void)
           "verdict names");
 }
 
+/* The search grid (opts.search_grid). (1) The paper's case with the search
+ * forced onto full pixels: within the same bounds as check_recovery's
+ * default (coarse) search, and reported FINE. (2) The compact scene of
+ * check_verdict, now with a final stage (k, i above the coarse ones, so the
+ * grid is chosen): AUTO takes full pixels there (a point target's contrast
+ * is far above joint_contrast_max), and the search forced onto the coarse
+ * grid must not pass the pair as "ok" either. */
+static void check_search_grid(void)
+{
+    sasnav_pose truth = {-0.0345, 0.0217, 0.041};
+    sasnav_run *run = simulate(truth, 1);
+    sasnav_pair_opts po;
+    sasnav_pair_default_opts(&po);
+    po.search_grid = SASNAV_SEARCH_FINE;
+    sasnav_pair *pair = run ? make_pair_opts(run, &po) : NULL;
+    sasnav_pair_result r;
+    if (pair) {
+        CHECK_OK(sasnav_pair_estimate(pair, &r));
+        printf("paper case, full-pixel search: error (%.3f mm, %.4f mm, %.1e rad)\n",
+               1e3 * (r.error.x - truth.x), 1e3 * (r.error.y - truth.y), r.error.theta - truth.theta);
+        CHECK(r.search_grid == SASNAV_SEARCH_FINE, "search grid %s", sasnav_search_grid_name(r.search_grid));
+        CHECK(fabs(r.error.x - truth.x) <= 5e-4 && fabs(r.error.y - truth.y) <= 2e-4 &&
+                  fabs(r.error.theta - truth.theta) <= 5e-4 && r.verdict == SASNAV_VERDICT_OK,
+              "full-pixel search: error (%.3f mm, %.4f mm, %.2e rad), verdict %s", 1e3 * (r.error.x - truth.x),
+              1e3 * (r.error.y - truth.y), r.error.theta - truth.theta, sasnav_verdict_name(r.verdict));
+    }
+    sasnav_pair_destroy(pair);
+    sasnav_run_free(run);
+
+    sasnav_scenario sc;
+    sasnav_scenario_preset("point", &sc);
+    run = NULL;
+    CHECK_OK(sasnav_simulate(&sc, NULL, NULL, &run));
+    if (!run) return;
+    for (int g = 0; g < 2; g++) {
+        sasnav_pair_default_opts(&po);
+        po.k = 3; /* a final stage, cheap: the verdict is the search's */
+        po.i = 2;
+        po.range_extent = 0.6;
+        po.range = run->range_of_interest;
+        po.tx_lag = run->tx_lag;
+        po.search_grid = g == 0 ? SASNAV_SEARCH_AUTO : SASNAV_SEARCH_COARSE;
+        pair = NULL;
+        CHECK_OK(sasnav_pair_create(&run->sys, &run->array, &run->win, &po, &pair));
+        if (!pair) continue;
+        CHECK_OK(sasnav_pair_set_data(pair, sasnav_run_ping(run, 8), sasnav_run_ping(run, 9),
+                                      sasnav_ping_displacement(&run->nav[8], &run->nav[9])));
+        CHECK_OK(sasnav_pair_estimate(pair, &r));
+        printf("point target, search grid %s: %s, verdict %s, margin %.3f\n",
+               sasnav_search_grid_name(po.search_grid), sasnav_search_grid_name(r.search_grid),
+               sasnav_verdict_name(r.verdict), r.margin);
+        CHECK(r.search_grid == (g == 0 ? SASNAV_SEARCH_FINE : SASNAV_SEARCH_COARSE), "grid %s used (asked %s)",
+              sasnav_search_grid_name(r.search_grid), sasnav_search_grid_name(po.search_grid));
+        CHECK(r.verdict != SASNAV_VERDICT_OK, "compact-scene pair judged ok with the %s search",
+              sasnav_search_grid_name(r.search_grid));
+        sasnav_pair_destroy(pair);
+    }
+    sasnav_run_free(run);
+}
+
 /* Per-ping Tx-array offsets: a noise-free pair simulated with exact EPCA
  * geometry whose second ping has a 4 mm longer offset (a ping made 4 %
  * faster). Told the offsets (set_data_lags), the estimator recovers the
@@ -353,10 +416,16 @@ static void check_opts_rules(void)
         CHECK(sasnav_final_criterion_parse(sasnav_final_criterion_name(c)) == c, "criterion %d's name", c);
     CHECK(sasnav_final_criterion_parse("best") == -1 && sasnav_final_criterion_parse(NULL) == -1,
           "an unknown criterion name accepted");
+    CHECK(o.search_grid == SASNAV_SEARCH_AUTO, "default search grid %d", o.search_grid);
+    for (int g = SASNAV_SEARCH_AUTO; g <= SASNAV_SEARCH_COARSE; g++)
+        CHECK(sasnav_search_grid_parse(sasnav_search_grid_name(g)) == g, "search grid %d's name", g);
+    CHECK(sasnav_search_grid_parse("finest") == -1 && sasnav_search_grid_parse(NULL) == -1 &&
+              !strcmp(sasnav_search_grid_name(9), "unknown"),
+          "an unknown search grid name accepted");
     static const char *const says[] = {"fix_yaw and yaw_sigma", "k = 0", "surge_sigma", "tx_lag",
                                        "final_criterion = 7", "joint_k = 0", "joint_mu", "joint_eta_ratio 0.9",
-                                       "joint_shift_max", "joint_contrast_max"};
-    for (int c = 0; c < 10; c++) {
+                                       "joint_shift_max", "joint_contrast_max", "search_grid 3"};
+    for (int c = 0; c < 11; c++) {
         sasnav_pair_default_opts(&o);
         if (c == 0) { o.fix_yaw = 1; o.yaw_sigma = 1e-3; }
         if (c == 1) o.k = 0;
@@ -368,6 +437,7 @@ static void check_opts_rules(void)
         if (c == 7) o.joint_eta_ratio = 0.9;
         if (c == 8) o.joint_shift_max = INFINITY;
         if (c == 9) o.joint_contrast_max = NAN;
+        if (c == 10) o.search_grid = 3;
         CHECK(sasnav_pair_opts_check(&o) == SASNAV_ERR_ARG && strstr(sasnav_last_error(), says[c]),
               "case %d should be refused naming '%s': %s", c, says[c], sasnav_last_error());
     }
@@ -717,6 +787,7 @@ int main(void)
     if (!reduced) check_intervals();
     check_lags();
     check_verdict();
+    if (!reduced) check_search_grid();
     check_fixed_yaw();
     check_error_functions();
     check_recovery((sasnav_pose){-0.0345, 0.0217, 0.041}, 1); /* the paper's case */

@@ -141,7 +141,7 @@ typedef struct {
     double verdict_eta_max;   /* final eta above which the estimate is
                                  "failed" (default 0.6: docs/estimator.md,
                                  "Verdict") */
-    double verdict_margin_min;/* level-1 eta of the best other candidate over
+    double verdict_margin_min;/* search-grid eta of the best other candidate over
                                  the chosen one's below which the estimate
                                  is "ambiguous" (default 1.15) */
     int nthreads;          /* OpenMP threads (0 = default; see "Threads" above) */
@@ -240,16 +240,17 @@ const char *sasnav_verdict_name(int verdict);
  * points one phase-centre slip either side of the winner. */
 #define SASNAV_PAIR_SCAN_CANDIDATES 4
 #define SASNAV_PAIR_MAX_CANDIDATES 8
-/* At most this many of them go through the zeta and level-1 eta stages. */
+/* At most this many of them go through the zeta and first eta stages. */
 #define SASNAV_PAIR_REFINED_CANDIDATES 3
 
 typedef struct {
-    sasnav_pose error;   /* motion error: after the zeta and level-1 eta
-                            stages when refined, else the scan's point */
+    sasnav_pose error;   /* motion error: after the zeta and first eta
+                            stages (on the search grid, result.search_grid)
+                            when refined, else the scan's point */
     double zeta_scan;    /* zeta of the valley scan there (NaN: no scan, or
                             a slip-check neighbour) */
-    double zeta, eta;    /* after the zeta and level-1 eta stages (NaN
-                            when not refined) */
+    double zeta, eta;    /* after those stages, on the search grid with
+                            the coarse iterations (NaN when not refined) */
     int refined;
     int same_as;         /* index of an earlier candidate it converged to
                             (-1: a distinct point) */
@@ -276,8 +277,8 @@ typedef struct {
     double seconds;            /* wall time */
     /* Where the time goes (summed over the candidates carried through):
      * wall seconds and operator applications of the overlap check and the
-     * global stage, the zeta stage, the eta stage at level 1 (fringe checks
-     * included), and the final stage at level 2 (k, i). */
+     * global stage, the zeta stage, the eta stage on the search grid (fringe
+     * checks included), and the final stage at level 2 (k, i). */
     double seconds_global, seconds_zeta, seconds_eta, seconds_final;
     long applications_global, applications_zeta, applications_eta, applications_final;
     int evaluations_final;     /* of evaluations_eta, those at level 2 */
@@ -287,8 +288,9 @@ typedef struct {
     sasnav_pair_candidate candidates[SASNAV_PAIR_MAX_CANDIDATES];
     int chosen;                /* index of the candidate that became the
                                   estimate (error: its final-stage value) */
-    double margin;             /* level-1 eta of the best other distinct
-                                  refined candidate over the chosen one's
+    double margin;             /* eta (search grid, coarse k, i) of the best
+                                  other distinct refined candidate over the
+                                  chosen one's
                                   (INFINITY: no other candidate) */
     int final_criterion;       /* the final stage's criterion used:
                                   SASNAV_FINAL_ETA or SASNAV_FINAL_JOINT */
@@ -296,6 +298,8 @@ typedef struct {
                                   estimate was above joint_eta_ratio of eta
                                   at its start, and eta's final stage was
                                   used instead */
+    int search_grid;           /* the search stages' grid used:
+                                  SASNAV_SEARCH_COARSE or SASNAV_SEARCH_FINE */
 } sasnav_pair_result;
 
 typedef struct sasnav_pair sasnav_pair;
@@ -417,7 +421,7 @@ int sasnav_pair_eval(sasnav_pair *pair, sasnav_pose error, int level, int blurre
 /* Full two-stage estimate (with the global stage if enabled). */
 int sasnav_pair_estimate(sasnav_pair *pair, sasnav_pair_result *result);
 
-/* The local stages only (zeta, level-1 eta, final), from a given motion
+/* The local stages only (zeta, first eta, final), from a given motion
  * error (e.g. a candidate of an earlier estimate chosen by
  * sasnav_navigate's joint resolution); margin INFINITY, one candidate. */
 int sasnav_pair_estimate_from(sasnav_pair *pair, sasnav_pose start, sasnav_pair_result *result);
@@ -425,8 +429,9 @@ int sasnav_pair_estimate_from(sasnav_pair *pair, sasnav_pose start, sasnav_pair_
 /* Two passes over a run (sasnav_navigate with the pairs' own speed-scaled
  * offsets, docs/navigation.md "Two passes"):
  * sasnav_pair_estimate_first is sasnav_pair_estimate without its final
- * (level-2) stage: the chosen candidate's level-1 estimate, with the
- * candidates, margin and verdict, its eta and overlap those of level 1
+ * (level-2) stage: the chosen candidate's estimate on the search grid, with
+ * the candidates, margin and verdict, its eta that grid's and its overlap
+ * that of level 1
  * (final_criterion SASNAV_FINAL_NONE; a preliminary verdict).
  * sasnav_pair_finish then runs the final stage alone from first->error on
  * the estimator's present data (set again, e.g. with other Tx-array

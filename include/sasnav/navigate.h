@@ -177,7 +177,7 @@ typedef struct {
                                  from the pairs' own surge in two passes:
                                  every pair first without its final stage
                                  (sasnav_pair_estimate_first), the offsets
-                                 from their level-1 surges, then every
+                                 from their first surges, then every
                                  pair's final stage with them
                                  (sasnav_pair_finish; about the time of
                                  one pass; not with reuse, not for runs

@@ -72,6 +72,8 @@ def test_bad_arguments(paper_pair, tmp_path):
         sasnav.estimate_pair(paper_pair, 0, 1, k=0)
     with pytest.raises(ValueError, match="final_criterion is one of"):
         sasnav.estimate_pair(paper_pair, 0, 1, final_criterion="best")
+    with pytest.raises(ValueError, match="search_grid is one of"):
+        sasnav.estimate_pair(paper_pair, 0, 1, search_grid="finest")
     with pytest.raises(ValueError):
         sasnav.navigate(paper_pair, method="nope")
     with pytest.raises(ValueError):

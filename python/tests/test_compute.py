@@ -44,6 +44,9 @@ def test_estimate_pair_paper(paper_pair):
     # the pings' relative yaw (0.041 rad) shifts the beam by more than an
     # eighth of the grid: the automatic final stage is eta's
     assert est.final_criterion == "eta"
+    # a speckle-like seabed (contrast ~2, below joint_contrast_max): the
+    # automatic search grid is the coarse one
+    assert est.search_grid == "coarse"
     assert est.candidates[est.chosen].chosen
     assert len(est.candidates) >= 2
     # displacement = nominal + error

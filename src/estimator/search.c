@@ -1105,6 +1105,7 @@ static int finish(sasnav_pair *pr, double pc_spacing, refine_out *r, refine_out 
     res->eta = r->eta;
     res->final_criterion = r->final_criterion;
     res->joint_rejected = r->joint_rejected;
+    res->search_grid = search_level(pr) ? SASNAV_SEARCH_FINE : SASNAV_SEARCH_COARSE;
     res->error = r->error;
     res->displacement = (sasnav_pose){pr->nominal.x + r->error.x, pr->nominal.y + r->error.y,
                                       pr->nominal.theta + r->error.theta};

@@ -338,6 +338,7 @@ class PairResult(Structure):  # estimator.h
         ("margin", c_double),
         ("final_criterion", c_int),  # sasnav_final_criterion
         ("joint_rejected", c_int),
+        ("search_grid", c_int),  # sasnav_search_grid
     ]
 
 

@@ -833,8 +833,9 @@ _METHOD_NAMES = {v: k for k, v in _METHODS.items()}
 _SPEED_LAGS = {"none": 0, "dvl": 1, "pairs": 2}
 _TX_YAW = {"none": 0, "auto": 1, "pairs": 2}
 _FINALS = {"eta": 0, "joint": 1, "auto": 2}  # sasnav_final_criterion
+_SEARCH_GRIDS = {"auto": 0, "fine": 1, "coarse": 2}  # sasnav_search_grid
 _ENUMS = {"norm": _NORMS, "method": _METHODS, "speed_lags": _SPEED_LAGS, "tx_yaw": _TX_YAW,
-          "final_criterion": _FINALS}
+          "final_criterion": _FINALS, "search_grid": _SEARCH_GRIDS}
 # compact_pairs: the Python navigation reads `pairs` directly (packed pairs
 # save memory on long runs, where open_run's navigate_part serves).
 _NOT_SETTABLE = {"reuse", "progress", "progress_user", "compact_pairs", "done", "n_done"}
@@ -915,7 +916,8 @@ class PairEstimate:
     error, displacement, nominal, global_stage, zeta_stage: Pose;
     truth: the true motion error when the run holds the truth (else None);
     zeta, eta: the error functions at the estimate; final_criterion: the
-    final stage's ("eta", "joint"; "none" for DPCA); verdict: "ok",
+    final stage's ("eta", "joint"; "none" for DPCA); search_grid: the
+    search stages' grid ("coarse", "fine"; "none" for DPCA); verdict: "ok",
     "ambiguous", "failed", "no_overlap" or (DPCA) "unchecked"; margin (inf: no other
     candidate); candidates: list of Candidate; status: "ok" or the
     estimator's status text; result: the C struct (every field)."""
@@ -941,6 +943,7 @@ class PairEstimate:
     applications: int
     seconds: float
     final_criterion: str
+    search_grid: str
     result: C.PairResult = field(repr=False)
 
 
@@ -963,6 +966,8 @@ def _estimate_from_c(r, p, q, nominal, truth):
                         "ok" if r.status == 0 else _status_name(r.status), cands, r.chosen,
                         r.evaluations, r.applications, r.seconds,
                         _final_name(r),
+                        "none" if r.verdict == 4 or r.evaluations == 0
+                        else {1: "fine", 2: "coarse"}.get(int(r.search_grid), "unknown"),
                         C.PairResult.from_buffer_copy(r))
 
 
