@@ -38,7 +38,7 @@ static const char *help =
     "  --search-grid G   grid of the search stages before the final one: auto\n"
     "                    (default: coarse on a speckle-like scene, fine on a\n"
     "                    few bright reflectors), fine (full pixels) or coarse\n"
-    "                    (the global stage's; 1.5x faster on seabed pairs;\n"
+    "                    (the global stage's; 1.25x faster on seabed pairs;\n"
     "                    docs/estimator.md)\n"
     "  --box S,W,Y       half-widths of the search box around the prior (m, m,\n"
     "                    rad; default 0.06, 0.035 and the grating-lobe-safe yaw)\n"

@@ -67,10 +67,10 @@ typedef enum {
                                 reconstruction at most joint_contrast_max), FINE
                                 on a few bright reflectors (default) */
     SASNAV_SEARCH_FINE = 1,  /* full pixels (every scene before this option) */
-    SASNAV_SEARCH_COARSE = 2 /* the global stage's coarse pixels: about 1.5x faster
-                                on seabed pairs, the same final estimates to 0.1
-                                mm rms there; on the tank's compact scene it
-                                slips (tests/test_tank_pairs.c) */
+    SASNAV_SEARCH_COARSE = 2 /* the global stage's coarse pixels: 1.25x faster
+                                on seabed pairs (two threads), the same final
+                                estimates to 0.1 mm rms there; on the tank's
+                                compact scene it slips (tests/test_tank_pairs.c) */
 } sasnav_search_grid;
 
 /* "auto", "fine", "coarse" ("unknown" otherwise). */

@@ -124,7 +124,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --search-grid G   grid of the search stages before the final one: auto
                       (default: coarse on a speckle-like scene, fine on a
                       few bright reflectors), fine (full pixels) or coarse
-                      (the global stage's; 1.5x faster on seabed pairs;
+                      (the global stage's; 1.25x faster on seabed pairs;
                       docs/estimator.md)
     --box S,W,Y       half-widths of the search box around the prior (m, m,
                       rad; default 0.06, 0.035 and the grating-lobe-safe yaw)
