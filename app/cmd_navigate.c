@@ -267,8 +267,7 @@ static void print_json(const char *input, const sasnav_navigation *nav)
         json_object_set_new(o, "estimate", pose_json(np->result.error));
         json_object_set_new(o, "eta", real_or_null(np->result.eta));
         json_object_set_new(o, "margin", isfinite(np->result.margin) ? json_real(np->result.margin) : json_null());
-        if (np->result.verdict != SASNAV_VERDICT_UNCHECKED && np->result.evaluations > 0)
-        {
+        if (np->result.verdict != SASNAV_VERDICT_UNCHECKED && np->result.evaluations > 0) {
             json_object_set_new(o, "final_criterion",
                                 json_string(sasnav_final_criterion_name(np->result.final_criterion)));
             json_object_set_new(o, "search_grid", json_string(sasnav_search_grid_name(np->result.search_grid)));
