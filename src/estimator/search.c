@@ -639,8 +639,7 @@ static int scan_item(sasnav_pair *w, int j, void *ctx)
 {
     scan_job *b = ctx;
     int k = b->at[j];
-    return sasnav_pair_eval(w, b->es[k], search_level(w), 0, &b->zs[k], NULL,
-                            NULL);
+    return sasnav_pair_eval(w, b->es[k], search_level(w), 0, &b->zs[k], NULL, NULL);
 }
 
 /* The global stage's shift at yaw hypothesis j (pair_batch): the shift

@@ -579,6 +579,7 @@ PROTOTYPES = {
     "sasnav_pair_default_opts": (_v, [_P(PairOpts)]),
     "sasnav_verdict_name": (c_char_p, [_i]),
     "sasnav_final_criterion_name": (c_char_p, [_i]),
+    "sasnav_search_grid_name": (c_char_p, [_i]),
     "sasnav_verdict_rank": (_i, [_i]),
     "sasnav_pair_create": (_i, [_P(SystemC), _P(SensorArrayC), _P(Window), _P(PairOpts),
                                 _P(c_void_p)]),

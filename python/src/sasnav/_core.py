@@ -954,6 +954,13 @@ def _final_name(r):
     return lib().sasnav_final_criterion_name(int(r.final_criterion)).decode()
 
 
+def _search_grid_name(r):
+    # as _final_name: no search ran for DPCA's estimates or unestimated pairs
+    if r.verdict == 4 or r.evaluations == 0:
+        return "none"
+    return lib().sasnav_search_grid_name(int(r.search_grid)).decode()
+
+
 def _estimate_from_c(r, p, q, nominal, truth):
     cands = []
     for k in range(max(0, min(r.n_candidates, C.PAIR_MAX_CANDIDATES))):
@@ -966,8 +973,7 @@ def _estimate_from_c(r, p, q, nominal, truth):
                         "ok" if r.status == 0 else _status_name(r.status), cands, r.chosen,
                         r.evaluations, r.applications, r.seconds,
                         _final_name(r),
-                        "none" if r.verdict == 4 or r.evaluations == 0
-                        else {1: "fine", 2: "coarse"}.get(int(r.search_grid), "unknown"),
+                        _search_grid_name(r),
                         C.PairResult.from_buffer_copy(r))
 
 
