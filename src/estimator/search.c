@@ -453,7 +453,8 @@ static double redot(const sasnav_cfloat *a, const sasnav_cfloat *b, size_t n)
  * anchor, the model is measured again there (up to `rounds` models). 12
  * evaluations on most pairs. */
 static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, double h, double far,
-                        int rounds, double xtol, int max_steps, sasnav_pose *best, double *fbest)
+                        int rounds, double xtol, int max_steps, sasnav_pose *best, double *fbest,
+                        sasnav_pose *measured)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(c->pr);
     const int n = o->fix_yaw ? 2 : 3;
@@ -475,8 +476,8 @@ static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, doubl
         Ju[k] = buf + np * (size_t)(1 + 2 * n + npair + k);
     }
     for (int q = 0; q < npair; q++) Rx[q] = buf + np * (size_t)(1 + 2 * n + q);
-    sasnav_pose at = start;
-    double fat = HUGE_VAL;
+    sasnav_pose at = start, last = start;
+    double fat = HUGE_VAL, um_last[3] = {0, 0, 0};
     int rc = SASNAV_OK;
     for (int round = 0; round < rounds && !rc; round++) {
         /* Measure the model around the anchor `at`. */
@@ -516,6 +517,8 @@ static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, doubl
             }
         /* Newton steps on the model from the anchor. */
         double u[3] = {0, 0, 0}, fu = fat;
+        um_last[0] = um_last[1] = um_last[2] = 0;
+        int model_step = 0;
         memcpy(r, r0, sizeof(sasnav_cfloat) * np);
         int moved_far = 0;
         for (int step = 0; step < max_steps; step++) {
@@ -545,9 +548,11 @@ static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, doubl
             /* Newton step; where the model is not convex along it, the
              * Gauss-Newton step (second-order part dropped). */
             double d[3] = {0, 0, 0}, mb[3] = {-G[0], -G[1], -G[2]}, slope = 0;
+            double (*M)[3] = H;
             int ok = solve_small(n, H, mb, d);
             for (int k = 0; k < n; k++) slope += G[k] * d[k];
             if (!ok || !(slope < 0)) {
+                M = A;
                 ok = solve_small(n, A, mb, d);
                 slope = 0;
                 for (int k = 0; k < n; k++) slope += G[k] * d[k];
@@ -565,6 +570,27 @@ static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, doubl
             double dmax = 0;
             for (int k = 0; k < n; k++) dmax = fabs(d[k]) > dmax ? fabs(d[k]) : dmax;
             if (dmax < 1e-9) break;
+            if (dmax < xtol) {
+                /* The last step, below the tolerance: taken on the model
+                 * without an evaluation of its own (where f^2 decreases on
+                 * it: G d + d^T M d / 2, M the matrix of the step). Before,
+                 * it was evaluated and then the steps stopped, so the
+                 * estimate is the same; f is the model's there, a change of
+                 * second order in a step this small (docs/estimator.md,
+                 * "The last Newton step on the model"). */
+                double q = 0;
+                for (int k = 0; k < n; k++) {
+                    q += G[k] * d[k];
+                    for (int m = 0; m < n; m++) q += 0.5 * d[k] * M[k][m] * d[m];
+                }
+                if (q < 0 && fu * fu + q > 0) {
+                    memcpy(um_last, u, sizeof um_last);
+                    for (int k = 0; k < 3; k++) u[k] += d[k];
+                    fu = sqrt(fu * fu + q);
+                    model_step = 1;
+                    break;
+                }
+            }
             int accepted = 0;
             for (int half = 0; half < 2 && !accepted; half++) {
                 for (int k = 0; k < 3; k++) uu[k] = u[k] + d[k];
@@ -593,6 +619,7 @@ static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, doubl
             if (dmax < xtol) break;
         }
         at = from_unit(c, u);
+        last = model_step ? from_unit(c, um_last) : at;
         fat = fu;
         if (!moved_far) break;
     }
@@ -600,6 +627,7 @@ static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, doubl
     if (rc) return rc;
     *best = at;
     *fbest = fat;
+    if (measured) *measured = last;
     return SASNAV_OK;
 }
 
@@ -857,6 +885,9 @@ typedef struct {
     long applications_zeta, applications_eta, applications_final;
     int final_criterion; /* the final stage's: SASNAV_FINAL_ETA or _JOINT */
     int joint_rejected;  /* the joint stage ran and eta rejected its estimate */
+    sasnav_pose measured; /* the final stage's last evaluated point (its
+                             overlap); `error` unless its last step was
+                             taken on the model */
 } refine_out;
 
 /* Stage 1 and the search-level part of stage 2 from `start` (a global-stage
@@ -969,12 +1000,13 @@ static int refine_eta(sasnav_pair *pr, sasnav_pose start, double pc_spacing, ref
 static int refine_final(sasnav_pair *pr, double pc_spacing, refine_out *out)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
+    out->measured = out->error;
     if (o->k == o->coarse_k && o->i == o->coarse_i) return SASNAV_OK;
     double lambda = sasnav_wavelength(&pr->sys), t = sasnav_now_seconds();
     long apps = sasnav_pair_applications(pr);
     stage_ctx ctx = {.pr = pr, .level = 2, .use_eta = 1};
     sasnav_pose fstep = {pc_spacing / 50.0, lambda / 80.0, pc_spacing / 25.0 / o->range};
-    sasnav_pose b = out->error;
+    sasnav_pose b = out->error, m = b;
     double f = out->eta;
     int rc = SASNAV_OK, joint = o->final_criterion == SASNAV_FINAL_JOINT;
     if (o->final_criterion == SASNAV_FINAL_AUTO && !o->gpu) {
@@ -1008,25 +1040,27 @@ static int refine_final(sasnav_pair *pr, double pc_spacing, refine_out *out)
         if (check) rc = sasnav_pair_eval(pr, out->error, PAIR_LEVELS - 1, 0, NULL, &e0, NULL);
         ctx.joint = 1;
         if (!rc) rc = pair_joint_tikhonov(pr, out->error, &ctx.lam);
-        if (!rc) rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, 0.1, 4, &b, &f);
+        if (!rc) rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, 0.1, 4, &b, &f, NULL);
         int nj = ctx.evals + 1 + check;
         if (!rc) rc = sasnav_pair_eval(pr, b, PAIR_LEVELS - 1, 0, NULL, &f, NULL);
+        m = b;
         if (!rc && check && !(f <= o->joint_eta_ratio * e0)) {
             ctx.joint = 0;
             b = out->error;
-            rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, 0.1, 4, &b, &f);
+            rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, 0.1, 4, &b, &f, &m);
             nj += ctx.evals;
             out->final_criterion = SASNAV_FINAL_ETA;
             out->joint_rejected = 1;
         }
         ctx.evals = nj;
     } else {
-        rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, 0.1, 4, &b, &f);
+        rc = newton_stage(&ctx, out->error, fstep, 0.5, 4.0, 2, 0.1, 4, &b, &f, &m);
     }
     out->evaluations_eta += ctx.evals;
     out->evaluations_final = ctx.evals;
     if (rc) return rc;
     out->error = b;
+    out->measured = m;
     out->eta = f;
     out->seconds_final = sasnav_now_seconds() - t;
     out->applications_final = sasnav_pair_applications(pr) - apps;
@@ -1108,7 +1142,9 @@ static int finish(sasnav_pair *pr, double pc_spacing, refine_out *r, refine_out 
     res->error = r->error;
     res->displacement = (sasnav_pose){pr->nominal.x + r->error.x, pr->nominal.y + r->error.y,
                                       pr->nominal.theta + r->error.theta};
-    rc = sasnav_pair_eval(pr, r->error, final_stage ? PAIR_LEVELS - 1 : 1, 0, NULL, NULL, &res->overlap);
+    /* The overlap where the final stage last evaluated (kept: no work) */
+    rc = sasnav_pair_eval(pr, final_stage ? r->measured : r->error, final_stage ? PAIR_LEVELS - 1 : 1, 0,
+                          NULL, NULL, &res->overlap);
     if (rc) return rc;
     res->evaluations = 1 + nglob + res->evaluations_zeta + res->evaluations_eta + 1;
     res->applications = pr->applications - apps0;
