@@ -92,8 +92,8 @@ static void check_recovery(sasnav_pose truth, uint64_t seed)
              * the overlap that of the last evaluated point, within 0.1 unit.
              * Both against a direct level-2 evaluation at the estimate: a
              * step that small changes eta by ~1e-5 relative (measured
-             * 5e-6) and the overlap by ~2e-4 (measured); a wrong model value
-             * (eta^2 for eta, the point before the step) is off by far more. */
+             * 5e-6) and the overlap by ~2e-4 (measured 1.7e-4); a wrong
+             * model value (eta^2 reported for eta, a mutation) fails it. */
             double eta2 = 0, ov2 = 0;
             CHECK_OK(sasnav_pair_eval(pair, r.error, 2, 0, NULL, &eta2, &ov2));
             CHECK(fabs(r.eta - eta2) <= 1e-4 * eta2, "eta %.7f, directly %.7f", r.eta, eta2);

@@ -450,7 +450,9 @@ static double redot(const sasnav_cfloat *a, const sasnav_cfloat *b, size_t n)
  * docs/estimator.md). Each Newton step costs one evaluation (its true
  * residual re-anchors the gradient); steps stop below `xtol` units or after
  * `max_steps`. When the estimate has moved more than `far` units from the
- * anchor, the model is measured again there (up to `rounds` models). 12
+ * anchor, the model is measured again there (up to `rounds` models). A
+ * step below `xtol` is the last and is taken on the model (not evaluated);
+ * *measured is then the point before it, the last one evaluated. 11
  * evaluations on most pairs. */
 static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, double h, double far,
                         int rounds, double xtol, int max_steps, sasnav_pose *best, double *fbest,
