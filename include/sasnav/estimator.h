@@ -264,8 +264,13 @@ typedef struct {
     sasnav_pose displacement;  /* final displacement estimate */
     sasnav_pose global_stage;  /* motion error after the global stage */
     sasnav_pose zeta_stage;    /* motion error after the zeta stage */
-    double zeta, eta;          /* error-function values at the stage minima */
-    double overlap;            /* ||psi_p|| / ||rho_p|| at the estimate */
+    double zeta, eta;          /* error-function values at the stage minima
+                                  (eta's final stage: the value of its
+                                  Newton model where its last step, below
+                                  the stage's tolerance, was not evaluated) */
+    double overlap;            /* ||psi_p|| / ||rho_p|| at the estimate (at
+                                  the final stage's last evaluated point,
+                                  within its tolerance of the estimate) */
     double ambiguity;          /* global stage: zeta of the valley scan's lowest
                                   local minimum over its second lowest (near
                                   1: the data hardly tell the surge-yaw
