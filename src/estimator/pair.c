@@ -1275,12 +1275,18 @@ const char *sasnav_final_criterion_name(int criterion)
     }
 }
 
-int sasnav_final_criterion_parse(const char *name)
+/* The value in lo..hi whose name(value) is `name`, or -1. */
+static int parse_name(const char *name, int lo, int hi, const char *(*names)(int))
 {
     if (!name) return -1;
-    for (int c = SASNAV_FINAL_ETA; c <= SASNAV_FINAL_AUTO; c++)
-        if (!strcmp(name, sasnav_final_criterion_name(c))) return c;
+    for (int v = lo; v <= hi; v++)
+        if (!strcmp(name, names(v))) return v;
     return -1;
+}
+
+int sasnav_final_criterion_parse(const char *name)
+{
+    return parse_name(name, SASNAV_FINAL_ETA, SASNAV_FINAL_AUTO, sasnav_final_criterion_name);
 }
 
 const char *sasnav_search_grid_name(int grid)
@@ -1295,10 +1301,7 @@ const char *sasnav_search_grid_name(int grid)
 
 int sasnav_search_grid_parse(const char *name)
 {
-    if (!name) return -1;
-    for (int g = SASNAV_SEARCH_AUTO; g <= SASNAV_SEARCH_COARSE; g++)
-        if (!strcmp(name, sasnav_search_grid_name(g))) return g;
-    return -1;
+    return parse_name(name, SASNAV_SEARCH_AUTO, SASNAV_SEARCH_COARSE, sasnav_search_grid_name);
 }
 
 const char *sasnav_verdict_name(int verdict)

@@ -479,7 +479,7 @@ static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, doubl
     }
     for (int q = 0; q < npair; q++) Rx[q] = buf + np * (size_t)(1 + 2 * n + q);
     sasnav_pose at = start, last = start;
-    double fat = HUGE_VAL, um_last[3] = {0, 0, 0};
+    double fat = HUGE_VAL;
     int rc = SASNAV_OK;
     for (int round = 0; round < rounds && !rc; round++) {
         /* Measure the model around the anchor `at`. */
@@ -519,7 +519,6 @@ static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, doubl
             }
         /* Newton steps on the model from the anchor. */
         double u[3] = {0, 0, 0}, fu = fat;
-        um_last[0] = um_last[1] = um_last[2] = 0;
         int model_step = 0;
         memcpy(r, r0, sizeof(sasnav_cfloat) * np);
         int moved_far = 0;
@@ -586,7 +585,7 @@ static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, doubl
                     for (int m = 0; m < n; m++) q += 0.5 * d[k] * M[k][m] * d[m];
                 }
                 if (q < 0 && fu * fu + q > 0) {
-                    memcpy(um_last, u, sizeof um_last);
+                    last = from_unit(c, u);
                     for (int k = 0; k < 3; k++) u[k] += d[k];
                     fu = sqrt(fu * fu + q);
                     model_step = 1;
@@ -621,7 +620,7 @@ static int newton_stage(stage_ctx *c, sasnav_pose start, sasnav_pose unit, doubl
             if (dmax < xtol) break;
         }
         at = from_unit(c, u);
-        last = model_step ? from_unit(c, um_last) : at;
+        if (!model_step) last = at;
         fat = fu;
         if (!moved_far) break;
     }
