@@ -18,7 +18,7 @@ static const char *help =
     "usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]\n"
     "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
     "                       [--cross-extent M] [--range-extent M] [--eta-max E] [--final C]\n"
-    "                       [--search-grid G]\n"
+    "                       [--search-grid G] [--coincidence F]\n"
     "                       [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]\n"
     "                       [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]\n"
     "                       [--threads N] [--gpu] [--json] [--checkpoint FILE]\n"
@@ -68,6 +68,9 @@ static const char *help =
     "                    errors for 2.5x the time; docs/estimator.md)\n"
     "  --eta-max E       final eta above which a pair's verdict is 'failed'\n"
     "                    (default 0.6; see 'sasnav pair --help')\n"
+    "  --coincidence F   compact scenes: a pair within F phase-centre spacings\n"
+    "                    of a coincidence is 'ambiguous' (default 0.02, 0 off;\n"
+    "                    see 'sasnav pair --help')\n"
     "  --final C         each pair's final-stage criterion: auto (default), eta\n"
     "                    or joint (see 'sasnav pair --help')\n"
     "  --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)\n"
@@ -267,6 +270,7 @@ static void print_json(const char *input, const sasnav_navigation *nav)
         json_object_set_new(o, "estimate", pose_json(np->result.error));
         json_object_set_new(o, "eta", real_or_null(np->result.eta));
         json_object_set_new(o, "margin", isfinite(np->result.margin) ? json_real(np->result.margin) : json_null());
+        json_object_set_new(o, "coincidence", json_boolean(np->result.coincidence));
         if (np->result.verdict != SASNAV_VERDICT_UNCHECKED && np->result.evaluations > 0) {
             json_object_set_new(o, "final_criterion",
                                 json_string(sasnav_final_criterion_name(np->result.final_criterion)));
@@ -504,6 +508,7 @@ int cmd_navigate(int argc, char **argv)
         {"keep-length", no_argument, 0, 'K'}, {"align-heading", no_argument, 0, 'H'},
         {"gpu", no_argument, 0, 'g'},        {"eta-max", required_argument, 0, 'e'},
         {"final", required_argument, 0, 'c'},  {"search-grid", required_argument, 0, 'P'},
+        {"coincidence", required_argument, 0, 'J'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -518,7 +523,7 @@ int cmd_navigate(int argc, char **argv)
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         /* Options of the pair navigation alone (refused with --virtual-array). */
-        if (strchr("mLyfAFUNBSRMCgeP", opt)) n_general++;
+        if (strchr("mLyfAFUNBSRMCgePJ", opt)) n_general++;
         have_cross |= opt == 'X';
         have_range |= opt == 'E';
         switch (opt) {
@@ -569,6 +574,11 @@ int cmd_navigate(int argc, char **argv)
             if (cli_parse_double(optarg, &no.pair.verdict_eta_max) ||
                 !(no.pair.verdict_eta_max > 0 && no.pair.verdict_eta_max <= 10))
                 return cli_usage("navigate", "--eta-max needs a bound in (0, 10]");
+            break;
+        case 'J':
+            if (cli_parse_double(optarg, &no.pair.verdict_coincidence) ||
+                !(no.pair.verdict_coincidence >= 0 && no.pair.verdict_coincidence <= 0.5))
+                return cli_usage("navigate", "--coincidence needs a fraction of the phase-centre spacing in [0, 0.5]");
             break;
         case 'U':
             if (cli_parse_double(optarg, &no.pair.surge_sigma) || !(no.pair.surge_sigma >= 0))
@@ -777,9 +787,10 @@ int cmd_navigate(int argc, char **argv)
         if (np->verdict == SASNAV_VERDICT_UNCHECKED && np->resolution == SASNAV_RESOLVED_NONE)
             n_unchecked++; /* one line for them all, below */
         else if (flagged(np))
-            fprintf(stderr, "sasnav navigate: warning: pair %d-%d is %s (%s%s%s)\n", np->p, np->q,
+            fprintf(stderr, "sasnav navigate: warning: pair %d-%d is %s (%s%s%s%s)\n", np->p, np->q,
                     np->resolution == SASNAV_RESOLVED_BRIDGED ? "bridged" : sasnav_verdict_name(np->verdict),
                     np->status != SASNAV_OK ? sasnav_strerror(np->status) : "estimate",
+                    np->result.coincidence ? " at a phase-centre coincidence on a compact scene" : "",
                     np->resolution == SASNAV_RESOLVED_BRIDGED ? ": aiding and motion model used" : "",
                     np->resolution == SASNAV_RESOLVED_NONE ? "" : "; resolved over the run");
         else if (np->resolution != SASNAV_RESOLVED_NONE)

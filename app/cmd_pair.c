@@ -16,7 +16,7 @@ static const char *help =
     "                   [--prior S,W,Y] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
     "                   [--cross-extent M] [--range-extent M]\n"
     "                   [--no-global] [--search-grid G] [--subintervals N]\n"
-    "                   [--eta-max E] [--final C]\n"
+    "                   [--eta-max E] [--coincidence F] [--final C]\n"
     "                   [--range R] [--lag-model fixed|motion] [--threads N] [--gpu]\n"
     "\n"
     "Estimates the motion error (displacement minus nominal) of ping q relative\n"
@@ -61,6 +61,10 @@ static const char *help =
     "                    0.6, calibrated at 10 m; correct survey-class pairs at\n"
     "                    70 m reach 0.6, slipped ones ~0.95: docs/estimator.md,\n"
     "                    \"A survey-class system\")\n"
+    "  --coincidence F   on compact scenes, an estimate within F phase-centre\n"
+    "                    spacings of a phase-centre coincidence is 'ambiguous'\n"
+    "                    (its surge is not resolved there; default 0.02, 0 off:\n"
+    "                    docs/estimator.md, \"Verdict\")\n"
     "  --threads N       OpenMP threads\n"
     "  --gpu             the error evaluations on a CUDA GPU (builds configured\n"
     "                    with -DSASNAV_CUDA=ON; the same estimates to float\n"
@@ -107,12 +111,13 @@ int cmd_pair(int argc, char **argv)
         {"range-extent", required_argument, 0, 'E'}, {"gpu", no_argument, 0, 'g'},
         {"eta-max", required_argument, 0, 'e'}, {"help", no_argument, 0, 'h'},
         {"final", required_argument, 0, 'C'},   {"search-grid", required_argument, 0, 'f'},
+        {"coincidence", required_argument, 0, 'c'},
         {0, 0, 0, 0}};
     long p = 0, q = 1, k = 8, iters = 8, nsub = 1, threads = 0;
     int json = 0, no_global = 0, have_p = 0, have_q = 0, motion_lag = 0, fix_yaw = 0, gpu = 0,
         search_grid = SASNAV_SEARCH_AUTO;
     double prior[3] = {0, 0, 0}, range = NAN, box[3] = {NAN, NAN, NAN}, yaw_sigma = 0, cross_extent = 0,
-           surge_sigma = 0, range_extent = 0, eta_max = 0;
+           surge_sigma = 0, range_extent = 0, eta_max = 0, coincidence = NAN;
     int final_c = SASNAV_FINAL_AUTO;
     int opt;
     optind = 1;
@@ -146,6 +151,10 @@ int cmd_pair(int argc, char **argv)
         case 'e':
             if (cli_parse_double(optarg, &eta_max) || !(eta_max > 0 && eta_max <= 10))
                 return cli_usage("pair", "--eta-max needs a bound in (0, 10]");
+            break;
+        case 'c':
+            if (cli_parse_double(optarg, &coincidence) || !(coincidence >= 0 && coincidence <= 0.5))
+                return cli_usage("pair", "--coincidence needs a fraction of the phase-centre spacing in [0, 0.5]");
             break;
         case 'C':
             final_c = sasnav_final_criterion_parse(optarg);
@@ -218,6 +227,7 @@ int cmd_pair(int argc, char **argv)
     if (cross_extent > 0) po.cross_extent = cross_extent;
     if (range_extent > 0) po.range_extent = range_extent;
     if (eta_max > 0) po.verdict_eta_max = eta_max;
+    if (!isnan(coincidence)) po.verdict_coincidence = coincidence;
     po.final_criterion = final_c;
     if (sasnav_pair_opts_check(&po)) {
         sasnav_run_free(run);
@@ -306,6 +316,7 @@ int cmd_pair(int argc, char **argv)
         json_object_set_new(root, "status", json_string(st));
         json_object_set_new(root, "verdict", json_string(out[0].rc ? "failed" : sasnav_verdict_name(r0->verdict)));
         json_object_set_new(root, "margin", isfinite(r0->margin) ? json_real(r0->margin) : json_null());
+        json_object_set_new(root, "coincidence", json_boolean(!out[0].rc && r0->coincidence));
         json_t *cands = json_array();
         for (int kc = 0; kc < r0->n_candidates; kc++) {
             const sasnav_pair_candidate *c = &r0->candidates[kc];
@@ -392,10 +403,12 @@ int cmd_pair(int argc, char **argv)
         }
         printf("verdict %s", sasnav_verdict_name(r->verdict));
         if (isfinite(r->margin)) printf(" (eta margin to the next candidate %.3f)", r->margin);
+        if (r->coincidence) printf(" (at a phase-centre coincidence on a compact scene: surge not resolved)");
         printf("\n");
         if (r->verdict != SASNAV_VERDICT_OK)
-            fprintf(stderr, "sasnav pair: warning: pings %ld-%ld: the estimate is %s (docs/estimator.md, \"Verdict\")\n",
-                    p, q, sasnav_verdict_name(r->verdict));
+            fprintf(stderr, "sasnav pair: warning: pings %ld-%ld: the estimate is %s%s (docs/estimator.md, \"Verdict\")\n",
+                    p, q, sasnav_verdict_name(r->verdict),
+                    r->coincidence ? ", at a phase-centre coincidence on a compact scene" : "");
     }
     free(out);
     return 0;

@@ -177,7 +177,7 @@ static int write_tables(const char *dir, const sasnav_validation *v)
     if ((rc = sasnav_text_commit(&out))) return rc;
     join(path, sizeof path, dir, "pairs.csv");
     if ((rc = sasnav_text_open(&out, path))) return rc;
-    fprintf(out.f, "k,p,q,surge,sway,yaw,error_surge,error_sway,error_yaw,status,verdict\n");
+    fprintf(out.f, "k,p,q,surge,sway,yaw,error_surge,error_sway,error_yaw,margin,coincidence,status,verdict\n");
     for (int k = 0; k < v->n_k; k++)
         for (int j = 0; j < v->k[k].n_pairs; j++) {
             const sasnav_navigate_pair *np = &v->k[k].pairs[j];
@@ -185,6 +185,9 @@ static int write_tables(const char *dir, const sasnav_validation *v)
                     np->result.error.y, np->result.error.theta);
             if (v->has_truth) fprintf(out.f, "%.9f,%.9f,%.6e,", np->error.x, np->error.y, np->error.theta);
             else fprintf(out.f, ",,,");
+            if (isfinite(np->result.margin)) fprintf(out.f, "%.4f,", np->result.margin);
+            else fprintf(out.f, "inf,");
+            fprintf(out.f, "%d,", np->result.coincidence);
             fprintf(out.f, "%s,%s\n", np->status == SASNAV_OK ? "ok" : sasnav_strerror(np->status),
                     sasnav_verdict_name(np->verdict));
         }

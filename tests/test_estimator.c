@@ -264,8 +264,42 @@ static void check_verdict(void)
               sasnav_verdict_name(r.verdict), r.margin);
         CHECK(r.chosen >= 0 && r.chosen < r.n_candidates && r.margin >= 1.0 && r.margin < 1.15,
               "chosen %d, margin %.3f", r.chosen, r.margin);
+        /* The coincidence rule (opts.verdict_coincidence), recomputed here
+         * from its definition: the along-track displacement within 0.02
+         * phase-centre spacings (d = 2.5 cm, half the receiver pitch) of
+         * a multiple of it, on a compact scene (contrast above 5). */
+        double d = 0.5 * (run->array.rx_u[1] - run->array.rx_u[0]);
+        double u = r.displacement.x / d;
+        int expect = pair_contrast(pair) > po.joint_contrast_max && fabs(u - nearbyint(u)) < 0.02;
+        printf("point target: contrast %.2f, displacement %.3f spacings, coincidence %d\n",
+               pair_contrast(pair), u, r.coincidence);
+        CHECK(pair_contrast(pair) > po.joint_contrast_max, "point target's contrast %.2f", pair_contrast(pair));
+        CHECK(r.coincidence == expect, "coincidence %d at %.4f spacings, expected %d", r.coincidence, u, expect);
     }
     sasnav_pair_destroy(pair);
+    /* The rule alone decides a local estimate (estimate_from: one
+     * candidate, no margin): with a tolerance of half a spacing every
+     * estimate on the compact scene is at a coincidence and "ambiguous",
+     * with 0 none is and the same estimate is "ok". */
+    for (int t = 0; t < 2; t++) {
+        sasnav_pair_opts pc = po;
+        pc.verdict_coincidence = t == 0 ? 0.5 : 0.0;
+        pair = NULL;
+        CHECK_OK(sasnav_pair_create(&run->sys, &run->array, &run->win, &pc, &pair));
+        if (!pair) continue;
+        CHECK_OK(sasnav_pair_set_data(pair, sasnav_run_ping(run, 8), sasnav_run_ping(run, 9),
+                                      sasnav_ping_displacement(&run->nav[8], &run->nav[9])));
+        sasnav_pose dt = sasnav_ping_displacement(&run->truth[8], &run->truth[9]),
+                    dn = sasnav_ping_displacement(&run->nav[8], &run->nav[9]);
+        sasnav_pose start = {dt.x - dn.x, dt.y - dn.y, dt.theta - dn.theta};
+        CHECK_OK(sasnav_pair_estimate_from(pair, start, &r));
+        printf("point target from the truth, coincidence tolerance %.1f: verdict %s, coincidence %d, eta %.3f\n",
+               pc.verdict_coincidence, sasnav_verdict_name(r.verdict), r.coincidence, r.eta);
+        CHECK(r.coincidence == (t == 0), "tolerance %.1f: coincidence %d", pc.verdict_coincidence, r.coincidence);
+        CHECK(r.verdict == (t == 0 ? SASNAV_VERDICT_AMBIGUOUS : SASNAV_VERDICT_OK),
+              "tolerance %.1f: verdict %s", pc.verdict_coincidence, sasnav_verdict_name(r.verdict));
+        sasnav_pair_destroy(pair);
+    }
     sasnav_run_free(run);
 
     /* Unrelated scenes: ping 1 of one speckle draw against ping 0 of another. */
@@ -283,6 +317,20 @@ static void check_verdict(void)
             printf("unrelated scenes: verdict %s, eta %.3f\n", sasnav_verdict_name(r.verdict), r.eta);
             CHECK(r.verdict == SASNAV_VERDICT_FAILED, "unrelated pings judged %s (eta %.3f)",
                   sasnav_verdict_name(r.verdict), r.eta);
+        }
+        sasnav_pair_destroy(pair);
+        /* A speckle seabed is not compact: even a tolerance of half a
+         * spacing flags nothing there (the contrast gate). */
+        sasnav_pair_opts pc = po;
+        pc.verdict_coincidence = 0.5;
+        pair = make_pair_opts(a, &pc);
+        if (pair) {
+            CHECK_OK(sasnav_pair_estimate_from(pair, (sasnav_pose){0.005, 0.002, 0.004}, &r));
+            printf("speckle pair: contrast %.2f, verdict %s, coincidence %d\n", pair_contrast(pair),
+                   sasnav_verdict_name(r.verdict), r.coincidence);
+            CHECK(pair_contrast(pair) <= pc.joint_contrast_max && !r.coincidence && r.verdict == SASNAV_VERDICT_OK,
+                  "speckle pair: contrast %.2f, coincidence %d, verdict %s", pair_contrast(pair), r.coincidence,
+                  sasnav_verdict_name(r.verdict));
         }
         sasnav_pair_destroy(pair);
     }

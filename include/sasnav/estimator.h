@@ -144,6 +144,17 @@ typedef struct {
     double verdict_margin_min;/* search-grid eta of the best other candidate over
                                  the chosen one's below which the estimate
                                  is "ambiguous" (default 1.15) */
+    double verdict_coincidence;/* on compact scenes (the intensity contrast of
+                                 p's reconstruction above joint_contrast_max)
+                                 an estimate whose along-track displacement
+                                 lies within this fraction of the
+                                 phase-centre spacing of a multiple of it
+                                 (a phase-centre coincidence) is
+                                 "ambiguous": there the criterion is drawn
+                                 to the coincidence from up to 0.4 spacing
+                                 away (docs/estimator.md, "Known weakness:
+                                 attraction to phase-centre coincidence");
+                                 default 0.02, 0 never */
     int nthreads;          /* OpenMP threads (0 = default; see "Threads" above) */
     sasnav_op_opts op;     /* operator options (default: sasnav_op's, with
                               tolerance 1e-3: docs/estimator.md) */
@@ -305,6 +316,11 @@ typedef struct {
                                   used instead */
     int search_grid;           /* the search stages' grid used:
                                   SASNAV_SEARCH_COARSE or SASNAV_SEARCH_FINE */
+    int coincidence;           /* 1: the estimate sits at a phase-centre
+                                  coincidence on a compact scene
+                                  (opts.verdict_coincidence), which makes
+                                  it "ambiguous" at best: its surge is not
+                                  resolved there */
 } sasnav_pair_result;
 
 typedef struct sasnav_pair sasnav_pair;

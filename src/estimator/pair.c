@@ -38,6 +38,7 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->blur = 0.075;
     o->verdict_eta_max = 0.6;
     o->verdict_margin_min = 1.15;
+    o->verdict_coincidence = 0.02;
     o->blur_cross = 0.0;
     o->error_extent = 0.0;
     o->error_taper = 0.0;
@@ -284,6 +285,8 @@ int sasnav_pair_opts_check(const sasnav_pair_opts *o)
     if (!(o->verdict_eta_max > 0)) OPT_FAIL("verdict_eta_max %g must be > 0", o->verdict_eta_max);
     if (!(o->verdict_margin_min >= 1) || !isfinite(o->verdict_margin_min))
         OPT_FAIL("verdict_margin_min %g must be finite and >= 1", o->verdict_margin_min);
+    if (!(o->verdict_coincidence >= 0 && o->verdict_coincidence <= 0.5))
+        OPT_FAIL("verdict_coincidence %g must be in [0, 0.5]", o->verdict_coincidence);
     if (o->gpu != 0 && o->gpu != 1) OPT_FAIL("gpu = %d must be 0 or 1", o->gpu);
     if (o->final_criterion != SASNAV_FINAL_ETA && o->final_criterion != SASNAV_FINAL_JOINT &&
         o->final_criterion != SASNAV_FINAL_AUTO)

@@ -1102,12 +1102,30 @@ static void add_costs(refine_out *sum, const refine_out *r)
     sum->evaluations_final += r->evaluations_final;
 }
 
-/* The verdict on a finished estimate (docs/estimator.md, "Verdict"). */
-static void judge(const sasnav_pair_opts *o, sasnav_pair_result *res, int converged)
+/* 1 when the estimate's along-track displacement lies within
+ * opts.verdict_coincidence of a multiple of the phase-centre spacing on a
+ * compact scene (p's intensity contrast above joint_contrast_max, the rule
+ * that picks the fine search grid): there the criterion is drawn to the
+ * coincidence from up to about 0.4 spacing away, so the surge it reports
+ * is not a measurement (docs/estimator.md, "Known weakness: attraction to
+ * phase-centre coincidence"). */
+static int at_coincidence(const sasnav_pair *pr, const sasnav_pair_result *res, double pc_spacing)
 {
+    const sasnav_pair_opts *o = sasnav_pair_options(pr);
+    if (!(o->verdict_coincidence > 0) || !(pc_spacing > 0)) return 0;
+    if (!(pair_contrast(pr) > o->joint_contrast_max)) return 0;
+    double u = res->displacement.x / pc_spacing;
+    return isfinite(u) && fabs(u - nearbyint(u)) < o->verdict_coincidence;
+}
+
+/* The verdict on a finished estimate (docs/estimator.md, "Verdict"). */
+static void judge(const sasnav_pair *pr, sasnav_pair_result *res, int converged, double pc_spacing)
+{
+    const sasnav_pair_opts *o = sasnav_pair_options(pr);
+    res->coincidence = at_coincidence(pr, res, pc_spacing);
     if (!(res->overlap >= o->min_overlap)) res->verdict = SASNAV_VERDICT_NO_OVERLAP;
     else if (!converged || !(res->eta <= o->verdict_eta_max)) res->verdict = SASNAV_VERDICT_FAILED;
-    else if (!(res->margin >= o->verdict_margin_min)) res->verdict = SASNAV_VERDICT_AMBIGUOUS;
+    else if (!(res->margin >= o->verdict_margin_min) || res->coincidence) res->verdict = SASNAV_VERDICT_AMBIGUOUS;
     else res->verdict = SASNAV_VERDICT_OK;
 }
 
@@ -1153,7 +1171,7 @@ static int finish(sasnav_pair *pr, double pc_spacing, refine_out *r, refine_out 
     int converged = !r->zrc && !r->erc;
     res->status = converged ? SASNAV_OK : SASNAV_ERR_NOT_CONVERGED;
     if (res->overlap < o->min_overlap) res->status = SASNAV_ERR_NO_OVERLAP;
-    judge(o, res, converged);
+    judge(pr, res, converged, pc_spacing);
     return SASNAV_OK;
 }
 
@@ -1388,7 +1406,7 @@ int sasnav_pair_finish(sasnav_pair *pr, const sasnav_pair_result *first, sasnav_
     res->applications_zeta = one.applications_zeta;
     res->applications_eta += one.applications_eta;
     if (res->status == SASNAV_OK && one.status == SASNAV_ERR_NOT_CONVERGED) res->status = one.status;
-    judge(sasnav_pair_options(pr), res, res->status != SASNAV_ERR_NOT_CONVERGED);
+    judge(pr, res, res->status != SASNAV_ERR_NOT_CONVERGED, pair_pc_spacing(pr));
     return SASNAV_OK;
 }
 

@@ -229,7 +229,7 @@ static uint64_t options_digest(const sasnav_run *run, const sasnav_navigate_opts
                                po->surge_sigma, po->grid_step.x, po->grid_step.y, po->grid_step.theta,
                                po->error_extent, po->error_taper, po->min_overlap,
                                po->verdict_eta_max, po->verdict_margin_min, po->op.tolerance,
-                               po->op.oversampling, 0, 0, 0, 0, 0, 0};
+                               po->op.oversampling, po->verdict_coincidence, 0, 0, 0, 0, 0};
         h = sasnav_hash_doubles(h, pd, 31);
         /* GPU estimates agree with the CPU's to float rounding, not to the
          * bit: a checkpoint of one is not resumed by the other (CPU keys

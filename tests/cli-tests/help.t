@@ -102,7 +102,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                      [--prior S,W,Y] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]
                      [--cross-extent M] [--range-extent M]
                      [--no-global] [--search-grid G] [--subintervals N]
-                     [--eta-max E] [--final C]
+                     [--eta-max E] [--coincidence F] [--final C]
                      [--range R] [--lag-model fixed|motion] [--threads N] [--gpu]
   
   Estimates the motion error (displacement minus nominal) of ping q relative
@@ -147,6 +147,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       0.6, calibrated at 10 m; correct survey-class pairs at
                       70 m reach 0.6, slipped ones ~0.95: docs/estimator.md,
                       "A survey-class system")
+    --coincidence F   on compact scenes, an estimate within F phase-centre
+                      spacings of a phase-centre coincidence is 'ambiguous'
+                      (its surge is not resolved there; default 0.02, 0 off:
+                      docs/estimator.md, "Verdict")
     --threads N       OpenMP threads
     --gpu             the error evaluations on a CUDA GPU (builds configured
                       with -DSASNAV_CUDA=ON; the same estimates to float
@@ -236,7 +240,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]
                          [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]
                          [--cross-extent M] [--range-extent M] [--eta-max E] [--final C]
-                         [--search-grid G]
+                         [--search-grid G] [--coincidence F]
                          [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]
                          [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]
                          [--threads N] [--gpu] [--json] [--checkpoint FILE]
@@ -286,6 +290,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       errors for 2.5x the time; docs/estimator.md)
     --eta-max E       final eta above which a pair's verdict is 'failed'
                       (default 0.6; see 'sasnav pair --help')
+    --coincidence F   compact scenes: a pair within F phase-centre spacings
+                      of a coincidence is 'ambiguous' (default 0.02, 0 off;
+                      see 'sasnav pair --help')
     --final C         each pair's final-stage criterion: auto (default), eta
                       or joint (see 'sasnav pair --help')
     --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)

@@ -280,6 +280,7 @@ class PairOpts(Structure):  # estimator.h
         ("max_evaluations", c_int),
         ("verdict_eta_max", c_double),
         ("verdict_margin_min", c_double),
+        ("verdict_coincidence", c_double),
         ("nthreads", c_int),
         ("op", OpOpts),
         ("gpu", c_int),
@@ -339,6 +340,7 @@ class PairResult(Structure):  # estimator.h
         ("final_criterion", c_int),  # sasnav_final_criterion
         ("joint_rejected", c_int),
         ("search_grid", c_int),  # sasnav_search_grid
+        ("coincidence", c_int),
     ]
 
 

@@ -919,7 +919,9 @@ class PairEstimate:
     final stage's ("eta", "joint"; "none" for DPCA); search_grid: the
     search stages' grid ("coarse", "fine"; "none" for DPCA); verdict: "ok",
     "ambiguous", "failed", "no_overlap" or (DPCA) "unchecked"; margin (inf: no other
-    candidate); candidates: list of Candidate; status: "ok" or the
+    candidate); coincidence: True where the estimate sits at a phase-centre
+    coincidence on a compact scene, where its surge is not resolved (the
+    verdict is then "ambiguous" at best); candidates: list of Candidate; status: "ok" or the
     estimator's status text; result: the C struct (every field)."""
 
     p: int
@@ -944,6 +946,7 @@ class PairEstimate:
     seconds: float
     final_criterion: str
     search_grid: str
+    coincidence: bool
     result: C.PairResult = field(repr=False)
 
 
@@ -974,6 +977,7 @@ def _estimate_from_c(r, p, q, nominal, truth):
                         r.evaluations, r.applications, r.seconds,
                         _final_name(r),
                         _search_grid_name(r),
+                        bool(r.coincidence),
                         C.PairResult.from_buffer_copy(r))
 
 
