@@ -63,7 +63,7 @@ static const char *help =
     "                    \"A survey-class system\")\n"
     "  --coincidence F   on compact scenes, an estimate within F phase-centre\n"
     "                    spacings of a phase-centre coincidence is 'ambiguous'\n"
-    "                    (its surge is not resolved there; default 0.02, 0 off:\n"
+    "                    (its surge is not resolved there; default 0.04, 0 off:\n"
     "                    docs/estimator.md, \"Verdict\")\n"
     "  --threads N       OpenMP threads\n"
     "  --gpu             the error evaluations on a CUDA GPU (builds configured\n"

@@ -154,7 +154,7 @@ typedef struct {
                                  to the coincidence from up to 0.4 spacing
                                  away (docs/estimator.md, "Known weakness:
                                  attraction to phase-centre coincidence");
-                                 default 0.02, 0 never */
+                                 default 0.04, 0 never */
     int nthreads;          /* OpenMP threads (0 = default; see "Threads" above) */
     sasnav_op_opts op;     /* operator options (default: sasnav_op's, with
                               tolerance 1e-3: docs/estimator.md) */

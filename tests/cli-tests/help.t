@@ -149,7 +149,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       "A survey-class system")
     --coincidence F   on compact scenes, an estimate within F phase-centre
                       spacings of a phase-centre coincidence is 'ambiguous'
-                      (its surge is not resolved there; default 0.02, 0 off:
+                      (its surge is not resolved there; default 0.04, 0 off:
                       docs/estimator.md, "Verdict")
     --threads N       OpenMP threads
     --gpu             the error evaluations on a CUDA GPU (builds configured
@@ -291,7 +291,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --eta-max E       final eta above which a pair's verdict is 'failed'
                       (default 0.6; see 'sasnav pair --help')
     --coincidence F   compact scenes: a pair within F phase-centre spacings
-                      of a coincidence is 'ambiguous' (default 0.02, 0 off;
+                      of a coincidence is 'ambiguous' (default 0.04, 0 off;
                       see 'sasnav pair --help')
     --final C         each pair's final-stage criterion: auto (default), eta
                       or joint (see 'sasnav pair --help')
