@@ -677,11 +677,11 @@ static int leanable(const sasnav_navigate_pair *np)
 }
 
 /* A pair at a phase-centre coincidence on a compact scene: its surge
- * deviation in the smoother over an "ok" pair's. On 590 simulated tank
+ * deviation in the smoother over an "ok" pair's. On 1,416 simulated tank
  * pairs (docs/validation.md, "Flagged pairs") the surge errors of such
- * pairs were 1.68 mm median / 5.48 mm p95 against 0.42 / 1.85 mm for the
- * "ok" ones: about 4x; the slip factor (25) would hand their surge to the
- * motion model, which a plotter's steps defeat. */
+ * pairs were 1.28 mm median / 5.52 mm p95 against 0.46 / 1.93 mm for the
+ * "ok" ones: about 3-4x; the slip factor (25) would hand their surge to
+ * the motion model, which a plotter's steps defeat. */
 #define COINCIDENCE_SURGE_FACTOR 4.0
 
 /* Standard deviations of a pair's estimate in the smoother. */
