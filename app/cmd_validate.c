@@ -478,16 +478,19 @@ int cmd_validate(int argc, char **argv)
         if (v.has_truth) printf(", true nav %.3f", v.min_correlation_truth);
         printf(")\n");
     }
-    int n_pairs = 0, n_flagged = 0;
+    int n_pairs = 0, n_flagged = 0, n_coincident = 0;
     for (int j = 0; j < v.n_k; j++) {
         n_pairs += v.k[j].n_pairs;
         n_flagged += v.k[j].n_flagged;
+        for (int i = 0; i < v.k[j].n_pairs; i++)
+            n_coincident += v.k[j].pairs[i].verdict != SASNAV_VERDICT_OK && v.k[j].pairs[i].result.coincidence;
     }
     if (n_flagged)
         fprintf(stderr,
-                "sasnav validate: warning: %d of %d pairs flagged (verdict not \"ok\"), used as estimated; "
-                "see pairs.csv\n",
-                n_flagged, n_pairs);
+                "sasnav validate: warning: %d of %d pairs flagged (verdict not \"ok\"; %d of them at a "
+                "phase-centre coincidence on a compact scene, where surge is not resolved), used as "
+                "estimated; see pairs.csv\n",
+                n_flagged, n_pairs, n_coincident);
     fprintf(stderr, "sasnav validate: %d trajectories, %d images, %.1f s -> %s\n", v.n_k, v.n_images,
             v.seconds, output);
     free(text);
