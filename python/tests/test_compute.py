@@ -47,6 +47,8 @@ def test_estimate_pair_paper(paper_pair):
     # a speckle-like seabed (contrast ~2, below joint_contrast_max): the
     # automatic search grid is the coarse one
     assert est.search_grid == "coarse"
+    # nor is the coincidence rule's business there (a compact-scene rule)
+    assert est.coincidence is False
     assert est.candidates[est.chosen].chosen
     assert len(est.candidates) >= 2
     # displacement = nominal + error
