@@ -41,7 +41,7 @@ def run_seed(sasnav, seed, top, threads):
         if rc:
             sys.exit(f"tank_verdicts: seed {seed}: {' '.join(cmd)} failed ({rc}); see {d}/log.txt")
         if cmd[1] == "ingest":
-            shutil.rmtree(rec)  # the WAV recording: 40 MB, no longer needed
+            shutil.rmtree(rec)  # the WAV recording, no longer needed
     return os.path.join(val, "pairs.csv")
 
 
