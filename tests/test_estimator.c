@@ -267,10 +267,12 @@ static void check_verdict(void)
         /* The coincidence rule (opts.verdict_coincidence), recomputed here
          * from its definition: the along-track displacement within 0.04
          * phase-centre spacings (d = 2.5 cm, half the receiver pitch) of
-         * a multiple of it, on a compact scene (contrast above 5). */
+         * a multiple of it shorter than the array (phase centres of q on
+         * p's), on a compact scene (contrast above 5). */
         double d = 0.5 * (run->array.rx_u[1] - run->array.rx_u[0]);
         double u = r.displacement.x / d;
-        int expect = pair_contrast(pair) > po.joint_contrast_max && fabs(u - nearbyint(u)) < 0.04;
+        int expect = pair_contrast(pair) > po.joint_contrast_max && fabs(nearbyint(u)) < run->array.n_rx &&
+                     fabs(u - nearbyint(u)) < 0.04;
         printf("point target: contrast %.2f, displacement %.3f spacings, coincidence %d\n",
                pair_contrast(pair), u, r.coincidence);
         CHECK(pair_contrast(pair) > po.joint_contrast_max, "point target's contrast %.2f", pair_contrast(pair));

@@ -1103,7 +1103,8 @@ static void add_costs(refine_out *sum, const refine_out *r)
 }
 
 /* 1 when the estimate's along-track displacement lies within
- * opts.verdict_coincidence of a multiple of the phase-centre spacing on a
+ * opts.verdict_coincidence of a multiple of the phase-centre spacing (shorter
+ * than the array, so that phase centres coincide) on a
  * compact scene (p's intensity contrast above joint_contrast_max, the rule
  * that picks the fine search grid): there the criterion is drawn to the
  * coincidence from up to about 0.4 spacing away, so the surge it reports
@@ -1114,8 +1115,10 @@ static int at_coincidence(const sasnav_pair *pr, const sasnav_pair_result *res, 
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
     if (!(o->verdict_coincidence > 0) || !(pc_spacing > 0)) return 0;
     if (!(pair_contrast(pr) > o->joint_contrast_max)) return 0;
-    double u = res->displacement.x / pc_spacing;
-    return isfinite(u) && fabs(u - nearbyint(u)) < o->verdict_coincidence;
+    double u = res->displacement.x / pc_spacing, m = nearbyint(u);
+    /* a multiple of the spacing shorter than the array: some phase centres
+     * of q fall on p's (disjoint apertures, m >= n, share none) */
+    return isfinite(u) && fabs(m) < pr->array.n_rx && fabs(u - m) < o->verdict_coincidence;
 }
 
 /* The verdict on a finished estimate (docs/estimator.md, "Verdict"). */
