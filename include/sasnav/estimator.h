@@ -149,7 +149,8 @@ typedef struct {
                                  an estimate whose along-track displacement
                                  lies within this fraction of the
                                  phase-centre spacing of a multiple of it
-                                 (a phase-centre coincidence) is
+                                 shorter than the array (a phase-centre
+                                 coincidence) is
                                  "ambiguous": there the criterion is drawn
                                  to the coincidence from up to 0.4 spacing
                                  away (docs/estimator.md, "Known weakness:
