@@ -156,10 +156,17 @@ int cli_parse_doubles(const char *text, int n, double *out)
 int cli_parse_grid(const char *text, sasnav_grid *grid)
 {
     double v[6];
-    if (cli_parse_doubles(text, 6, v)) return -1;
-    if (v[2] != floor(v[2]) || v[5] != floor(v[5]) || v[2] < 1 || v[5] < 1 || v[2] > 1e5 ||
-        v[5] > 1e5)
+    if (cli_parse_doubles(text, 6, v)) {
+        sasnav_set_error(SASNAV_ERR_ARG, "needs six numbers X0,X1,NX,Y0,Y1,NY, got '%s'", text);
         return -1;
+    }
+    if (v[2] != floor(v[2]) || v[5] != floor(v[5]) || v[2] < 1 || v[5] < 1 || v[2] > 1e5 ||
+        v[5] > 1e5) {
+        sasnav_set_error(SASNAV_ERR_ARG, "NX and NY must be whole numbers in 1..100000, got %g and %g",
+                         v[2], v[5]);
+        return -1;
+    }
+    /* the grid's own reason otherwise (bounds, size) */
     return sasnav_grid_make(v[0], v[1], (int)v[2], v[3], v[4], (int)v[5], grid) ? -1 : 0;
 }
 

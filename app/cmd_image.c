@@ -263,7 +263,7 @@ int cmd_image(int argc, char **argv)
     const char *input = argv[optind];
     sasnav_grid grid;
     if (gridtext && cli_parse_grid(gridtext, &grid))
-        return cli_usage("image", "--grid needs X0,X1,NX,Y0,Y1,NY with X1 > X0, Y1 > Y0, NX, NY >= 2");
+        return cli_usage("image", "--grid: %s", sasnav_last_error());
 
     int ranks = cli_mpi_size(), rank = cli_mpi_rank(), rank0_failed = 0;
     if (ranks > 1 && ping >= 0)

@@ -98,7 +98,7 @@ int cmd_refine(int argc, char **argv)
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         switch (opt) {
-        case 'g': if (cli_parse_grid(optarg, &ro.grid)) return cli_usage("refine", "--grid needs X0,X1,NX,Y0,Y1,NY"); break;
+        case 'g': if (cli_parse_grid(optarg, &ro.grid)) return cli_usage("refine", "--grid: %s", sasnav_last_error()); break;
         case 's':
             if (cli_parse_int(optarg, 1, SASNAV_REFINE_MAX_SWEEPS, &sweeps))
                 return cli_usage("refine", "--sweeps needs 1..%d", SASNAV_REFINE_MAX_SWEEPS);

@@ -378,7 +378,7 @@ int cmd_validate(int argc, char **argv)
             break;
         case 'k': if (cli_parse_int(optarg, 1, 100, &k)) return cli_usage("validate", "--k needs 1..100"); break;
         case 'i': if (cli_parse_int(optarg, 1, 100, &iters)) return cli_usage("validate", "--i needs 1..100"); break;
-        case 'g': if (cli_parse_grid(optarg, &vo.grid)) return cli_usage("validate", "--grid needs X0,X1,NX,Y0,Y1,NY"); break;
+        case 'g': if (cli_parse_grid(optarg, &vo.grid)) return cli_usage("validate", "--grid: %s", sasnav_last_error()); break;
         case 't': if (cli_parse_int(optarg, 0, 1024, &threads)) return cli_usage("validate", "--threads needs 0..1024"); break;
         case 'j': json = 1; break;
         case 'R': vo.refine = 1; break;
