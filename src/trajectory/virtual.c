@@ -399,7 +399,7 @@ int sasnav_navigate_virtual(const sasnav_run *run, const sasnav_virtual_opts *op
     if (c.n_groups < 2)
         return sasnav_set_error(SASNAV_ERR_ARG,
                                 "virtual arrays: %d pings make fewer than two groups of %d pings "
-                                "(every %d) every %d",
+                                "(a ping every %d, a group every %d pings)",
                                 run->n_pings, c.k, c.m, c.stride);
     c.nv = c.varray.n_rx;
     int ng = c.n_groups;
