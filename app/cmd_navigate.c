@@ -70,7 +70,8 @@ static const char *help =
     "                    (default 0.6; see 'sasnav pair --help')\n"
     "  --coincidence F   compact scenes: a pair within F phase-centre spacings\n"
     "                    of a coincidence is 'ambiguous' (default 0.04, 0 off;\n"
-    "                    see 'sasnav pair --help')\n"
+    "                    with --virtual-array off unless given; see 'sasnav\n"
+    "                    pair --help')\n"
     "  --final C         each pair's final-stage criterion: auto (default), eta\n"
     "                    or joint (see 'sasnav pair --help')\n"
     "  --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)\n"
@@ -518,12 +519,13 @@ int cmd_navigate(int argc, char **argv)
     long threads = 0, k = no.pair.k, iters = no.pair.i;
     int json = 0, opt, anchor_truth = 0, have_first = 0, n_general = 0, estimate_yaw = 0;
     long vk = 0, vstride = 0, viters = 2, vinter = 1;
-    int have_cross = 0, have_range = 0, closed = 0, keep_length = 0, align_heading = 0;
+    int have_cross = 0, have_range = 0, have_coinc = 0, closed = 0, keep_length = 0, align_heading = 0;
     double first[3] = {0, 0, 0};
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         /* Options of the pair navigation alone (refused with --virtual-array). */
-        if (strchr("mLyfAFUNBSRMCgePJ", opt)) n_general++;
+        if (strchr("mLyfAFUNBSRMCgeP", opt)) n_general++;
+        have_coinc |= opt == 'J';
         have_cross |= opt == 'X';
         have_range |= opt == 'E';
         switch (opt) {
@@ -656,7 +658,7 @@ int cmd_navigate(int argc, char **argv)
             return cli_usage("navigate", "--virtual-array takes only --interleave, --stride, "
                                          "--iterations, --closed, --keep-length, --align-heading, "
                                          "--estimate-yaw, --k, --i, --cross-extent, --range-extent, "
-                                         "--threads and --json");
+                                         "--coincidence, --threads and --json");
         if (cli_mpi_size() > 1)
             return cli_usage("navigate", "--virtual-array runs in one process (use --threads)");
         sasnav_virtual_opts vo;
@@ -676,6 +678,7 @@ int cmd_navigate(int argc, char **argv)
         vo.pair.fix_yaw = !estimate_yaw;
         vo.pair.cross_extent = have_cross ? no.pair.cross_extent : 0.0;
         vo.pair.range_extent = have_range ? no.pair.range_extent : 0.0;
+        if (have_coinc) vo.pair.verdict_coincidence = no.pair.verdict_coincidence;
         return navigate_virtual(input, output, &vo, json);
     }
     no.pair.k = (int)k;

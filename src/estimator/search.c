@@ -1102,23 +1102,50 @@ static void add_costs(refine_out *sum, const refine_out *r)
     sum->evaluations_final += r->evaluations_final;
 }
 
-/* 1 when the estimate's along-track displacement lies within
- * opts.verdict_coincidence of a multiple of the phase-centre spacing (shorter
- * than the array, so that phase centres coincide) on a
- * compact scene (p's intensity contrast above joint_contrast_max, the rule
- * that picks the fine search grid): there the criterion is drawn to the
- * coincidence from up to about 0.4 spacing away, so the surge it reports
- * is not a measurement (docs/estimator.md, "Known weakness: attraction to
- * phase-centre coincidence"). */
+/* Along-track positions of a ping's phase centres (the midpoints of its
+ * transmitter and each receiver) in its own centroid frame: every
+ * channel's own geometry where the layout is per channel, the ping's EPCA
+ * geometry otherwise. */
+static void phase_centres(const sasnav_pair *pr, int q, double *x)
+{
+    const sasnav_ping_pose *ch = pr->per_channel ? (q ? pr->chan_q : pr->chan_p) : NULL;
+    const sasnav_ping_pose *one = q ? &pr->local_q : &pr->local_p;
+    for (int l = 0; l < pr->array.n_rx; l++) {
+        const sasnav_ping_pose *g = ch ? &ch[l] : one;
+        double xr, yr;
+        sasnav_pose_apply(g->array, pr->array.rx_u[l], 0.0, &xr, &yr);
+        x[l] = 0.5 * (xr + g->tx.x);
+    }
+}
+
+/* 1 when, moved by the estimate's along-track displacement, a phase centre
+ * of q lies within opts.verdict_coincidence phase-centre spacings of one of
+ * p's (on a uniform array: the displacement within that tolerance of a
+ * multiple of the spacing shorter than the array; disjoint apertures share
+ * none), on a compact scene (p's intensity contrast above
+ * joint_contrast_max, the rule that picks the fine search grid): there the
+ * criterion is drawn to the coincidence from up to about 0.4 spacing away,
+ * so the surge it reports is not a measurement (docs/estimator.md, "Known
+ * weakness: attraction to phase-centre coincidence"). The phase centres
+ * themselves, not multiples of a mean spacing: a per-channel layout (a
+ * virtual array, several transmitters) need not be uniform. The turn
+ * between the pings is left out: it moves a phase centre on the array's
+ * axis, x from the centroid, by x yaw^2 / 2 along track (20 microns at
+ * 0.4 m and 1e-2 rad). */
 static int at_coincidence(const sasnav_pair *pr, const sasnav_pair_result *res, double pc_spacing)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
     if (!(o->verdict_coincidence > 0) || !(pc_spacing > 0)) return 0;
     if (!(pair_contrast(pr) > o->joint_contrast_max)) return 0;
-    double u = res->displacement.x / pc_spacing, m = nearbyint(u);
-    /* a multiple of the spacing shorter than the array: some phase centres
-     * of q fall on p's (disjoint apertures, m >= n, share none) */
-    return isfinite(u) && fabs(m) < pr->array.n_rx && fabs(u - m) < o->verdict_coincidence;
+    double dx = res->displacement.x, tol = o->verdict_coincidence * pc_spacing;
+    if (!isfinite(dx)) return 0;
+    double xp[SASNAV_MAX_RX], xq[SASNAV_MAX_RX];
+    phase_centres(pr, 0, xp);
+    phase_centres(pr, 1, xq);
+    for (int i = 0; i < pr->array.n_rx; i++)
+        for (int j = 0; j < pr->array.n_rx; j++)
+            if (fabs(xq[j] + dx - xp[i]) < tol) return 1;
+    return 0;
 }
 
 /* The verdict on a finished estimate (docs/estimator.md, "Verdict"). */

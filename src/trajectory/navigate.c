@@ -684,6 +684,17 @@ static int leanable(const sasnav_navigate_pair *np)
  * the motion model, which a plotter's steps defeat. */
 #define COINCIDENCE_SURGE_FACTOR 4.0
 
+/* A pair whose verdict `verdict` is "ambiguous" only for its own estimate
+ * sitting at a phase-centre coincidence on a compact scene: its candidates
+ * were told apart (margin), and nothing of the resolution replaced or
+ * doubted the estimate. No slip is in doubt: its sway and yaw are an ok
+ * pair's, its surge is drawn towards the coincidence. */
+static int coincidence_only(const nav_ctx *ctx, int verdict, const sasnav_navigate_pair *np)
+{
+    return verdict == SASNAV_VERDICT_AMBIGUOUS && np->result.coincidence &&
+           np->result.margin >= ctx->opts->pair.verdict_margin_min && np->resolution == SASNAV_RESOLVED_NONE;
+}
+
 /* Standard deviations of a pair's estimate in the smoother. */
 static sasnav_pose estimate_sigma(const nav_ctx *ctx, const sasnav_navigate_pair *np)
 {
@@ -692,17 +703,20 @@ static sasnav_pose estimate_sigma(const nav_ctx *ctx, const sasnav_navigate_pair
     if (np->resolution == SASNAV_RESOLVED_BRIDGED || !usable(np) ||
         np->verdict == SASNAV_VERDICT_FAILED || np->verdict == SASNAV_VERDICT_NO_OVERLAP)
         return (sasnav_pose){INFINITY, INFINITY, INFINITY};
-    if (np->verdict == SASNAV_VERDICT_AMBIGUOUS && np->result.coincidence &&
-        np->result.margin >= ctx->opts->pair.verdict_margin_min) {
-        /* Ambiguous only for being at a phase-centre coincidence on a
-         * compact scene: no slip is in doubt, but the surge is drawn
-         * towards the coincidence (docs/navigation.md, "Pairs at a
-         * phase-centre coincidence") */
-        s.x *= COINCIDENCE_SURGE_FACTOR;
-    } else if (np->verdict == SASNAV_VERDICT_AMBIGUOUS) {
-        /* The surge-yaw slip direction is in doubt; sway is not. */
+    if (np->verdict == SASNAV_VERDICT_AMBIGUOUS && !coincidence_only(ctx, np->verdict, np)) {
+        /* The surge-yaw slip direction is in doubt; sway is not. (A pair
+         * the resolution re-estimated or moved to another candidate stays
+         * here even at a coincidence: its slip is what is in doubt.) */
         s.x *= 25.0;
         s.theta *= 25.0;
+    } else if (np->result.coincidence) {
+        /* At a phase-centre coincidence on a compact scene, whatever its
+         * verdict: the surge is drawn towards the coincidence
+         * (docs/navigation.md, "Pairs at a phase-centre coincidence"). An
+         * aiding that agrees within its gate (half a spacing and more)
+         * cannot tell that pull from the truth, so its "ok" does not
+         * restore the surge's weight. */
+        s.x *= COINCIDENCE_SURGE_FACTOR;
     }
     return s;
 }
@@ -1107,7 +1121,10 @@ static int pairs_tx_yaw(const nav_ctx *ctx, int n_pairs, double *tx_yaw, int *us
         sasnav_navigate_pair np;
         get_pair(ctx, j, &np);
         double len = np.q == np.p + 1 ? s[np.q] - s[np.p] : 0.0;
-        if (np.first_verdict != SASNAV_VERDICT_OK || !usable(&np) || !(len > 0)) continue;
+        /* yaw rates from ok pairs, and from pairs ambiguous only for their
+         * surge at a coincidence (their yaw is an ok pair's) */
+        int yaw_ok = np.first_verdict == SASNAV_VERDICT_OK || coincidence_only(ctx, np.first_verdict, &np);
+        if (!yaw_ok || !usable(&np) || !(len > 0)) continue;
         rate[np.q] = np.result.displacement.theta / len;
         valid[np.q] = isfinite(rate[np.q]) != 0;
         *used += valid[np.q];

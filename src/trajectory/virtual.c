@@ -123,6 +123,11 @@ void sasnav_virtual_default_opts(sasnav_virtual_opts *opts)
      * not, and these layouts are small. */
     opts->pair.coarse_k = opts->pair.k;
     opts->pair.coarse_i = opts->pair.i;
+    /* The coincidence rule of the verdict was measured on uniform arrays
+     * (the tank, docs/estimator.md "Verdict"), not on virtual arrays:
+     * off, their verdict is the margin's (pair.verdict_coincidence turns
+     * it on; it then tests the groups' own phase centres). */
+    opts->pair.verdict_coincidence = 0.0;
     opts->iterations = 2;
     opts->nthreads = 0;
 }

@@ -292,7 +292,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       (default 0.6; see 'sasnav pair --help')
     --coincidence F   compact scenes: a pair within F phase-centre spacings
                       of a coincidence is 'ambiguous' (default 0.04, 0 off;
-                      see 'sasnav pair --help')
+                      with --virtual-array off unless given; see 'sasnav
+                      pair --help')
     --final C         each pair's final-stage criterion: auto (default), eta
                       or joint (see 'sasnav pair --help')
     --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)
@@ -477,7 +478,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     validate.json       the summary (also on stdout with --json)
     trajectories.csv    ping, K, along-track, cross-track, yaw (aligned)
     pairs.csv           every pair estimate (motion error; its error vs the
-                        truth when known), status and verdict
+                        truth when known), its margin, whether it sits at a
+                        phase-centre coincidence, status and verdict
     trajectories.png    along/cross-track deviation from the mean of the K
     correlation.csv     pairwise image correlations (navigated images)
     siso_J.png, simo_J.png   images with the largest K's trajectory
