@@ -302,6 +302,51 @@ static void check_verdict(void)
               "tolerance %.1f: verdict %s", pc.verdict_coincidence, sasnav_verdict_name(r.verdict));
         sasnav_pair_destroy(pair);
     }
+    /* The same pair given channel by channel (set_data_channels, each
+     * channel with the EPCA geometry): the rule then reads each channel's
+     * phase centres. With q's channels placed a quarter spacing further
+     * along in q's frame, the estimated displacement moves a quarter
+     * spacing back (the echoes put the phase centres where they were), so
+     * the phase centres still meet while the displacement is no longer near
+     * a multiple of the spacing: the rule must follow the phase centres
+     * (the test of multiples of the spacing, the rule before, says no). */
+    for (int t = 0; t < 2; t++) {
+        sasnav_pair_opts pc = po;
+        pc.verdict_coincidence = 0.1;
+        pair = NULL;
+        CHECK_OK(sasnav_pair_create(&run->sys, &run->array, &run->win, &pc, &pair));
+        if (!pair) continue;
+        int n = run->array.n_rx;
+        sasnav_ping_pose chp[SASNAV_MAX_RX], chq[SASNAV_MAX_RX];
+        double d = 0.5 * (run->array.rx_u[1] - run->array.rx_u[0]);
+        for (int l = 0; l < n; l++) {
+            chp[l] = chq[l] = sasnav_epca_local(run->tx_lag, 0.0);
+            if (t == 1) { /* q's transmitter and array a quarter spacing further on */
+                chq[l].tx.x += 0.25 * d;
+                chq[l].array.x += 0.25 * d;
+            }
+        }
+        CHECK_OK(sasnav_pair_set_data_channels(pair, sasnav_run_ping(run, 8), sasnav_run_ping(run, 9),
+                                               sasnav_ping_displacement(&run->nav[8], &run->nav[9]), chp,
+                                               chq));
+        sasnav_pose dt = sasnav_ping_displacement(&run->truth[8], &run->truth[9]),
+                    dn = sasnav_ping_displacement(&run->nav[8], &run->nav[9]);
+        CHECK_OK(sasnav_pair_estimate_from(pair, (sasnav_pose){dt.x - dn.x, dt.y - dn.y, dt.theta - dn.theta},
+                                           &r));
+        /* expected from the displacement and the layouts above: q's phase
+         * centres at (l + t / 4) d + x, p's at l d (common offset aside) */
+        double u = r.displacement.x / d + 0.25 * t, m = nearbyint(u);
+        int expect = pair_contrast(pair) > pc.joint_contrast_max && fabs(m) < n && fabs(u - m) < 0.1;
+        printf("point target by channels, q moved %.2f spacing: displacement %.3f spacings, coincidence %d\n",
+               0.25 * t, r.displacement.x / d, r.coincidence);
+        CHECK(r.coincidence == expect, "by channels, q moved %.2f: coincidence %d, expected %d", 0.25 * t,
+              r.coincidence, expect);
+        if (t == 1)
+            CHECK(expect != (fabs(r.displacement.x / d - nearbyint(r.displacement.x / d)) < 0.1),
+                  "the moved layout does not tell the phase centres from the mean spacing "
+                  "(displacement %.3f spacings)", r.displacement.x / d);
+        sasnav_pair_destroy(pair);
+    }
     sasnav_run_free(run);
 
     /* Unrelated scenes: ping 1 of one speckle draw against ping 0 of another. */
