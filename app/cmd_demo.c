@@ -218,6 +218,10 @@ static int plot_errors(demo *d)
     static const char *comp[3] = {"surge", "sway", "yaw"};
     static const char *unit[3] = {"mm", "mm", "mrad"};
     for (int i = 0; i < n && !rc; i++) ping[i] = i;
+    /* the paper's final sway bound, +-lambda/25, on the cumulative sway: one
+     * curve round the band (its ends lie on the plot's frame) */
+    double b = 1e3 * sasnav_wavelength(&d->run->sys) / 25;
+    double band_x[5] = {0, n - 1, n - 1, 0, 0}, band_y[5] = {b, b, -b, -b, b};
     for (int k = 0; k < 2 && !rc; k++) {
         for (int c = 0; c < 3 && !rc; c++) {
             for (int m = 0; m < 2; m++) {
@@ -225,13 +229,14 @@ static int plot_errors(demo *d)
                 for (int i = 0; i < n; i++)
                     e[m][i] = 1e3 * (c == 0 ? err[i].x : c == 1 ? err[i].y : err[i].theta);
             }
-            int counts[2] = {n, n};
-            const double *xs[2] = {ping, ping}, *ys[2] = {e[0], e[1]};
-            const char *labels[2] = {"subspace", "DPCA"};
+            int counts[3] = {n, n, 5};
+            const double *xs[3] = {ping, ping, band_x}, *ys[3] = {e[0], e[1], band_y};
+            const char *labels[3] = {"subspace", "DPCA", "+-lambda/25"};
+            int ns = k == 1 && c == 1 ? 3 : 2;
             char title[128], ylabel[64], name[64], path[4096];
             snprintf(title, sizeof title, "%s %s error", kind[k], comp[c]);
             snprintf(ylabel, sizeof ylabel, "%s error (%s)", comp[c], unit[c]);
-            sasnav_line_plot lp = {title, "ping", ylabel, 2, counts, xs, ys, labels, 0, NAN, NAN};
+            sasnav_line_plot lp = {title, "ping", ylabel, ns, counts, xs, ys, labels, 0, NAN, NAN};
             snprintf(name, sizeof name, "error-%s-%s.png", kind[k], comp[c]);
             path_in(d, name, path, sizeof path);
             rc = sasnav_plot_lines(path, &lp);
