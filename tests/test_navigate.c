@@ -489,13 +489,26 @@ static void test_resume(void)
     CHECK(same_navigation(&ref, &nav), "a navigation from records differs");
     sasnav_navigation_free(&nav);
 
-    /* Other options (k): no record applies. */
-    o.pair.k = o.pair.coarse_k + 1;
+    /* Other options: no record applies. k; and options that change an
+     * estimate or its verdict only in some cases (the final criterion, the
+     * joint misfit's contrast gate, which also gates the coincidence
+     * rule, the coincidence tolerance): a record made under others must not
+     * be taken, even where (as here, without a final stage) they would
+     * give the same. */
+    for (int v = 0; v < 4; v++) {
+        sasnav_navigate_opts ov = o;
+        if (v == 0) ov.pair.k = o.pair.coarse_k + 1;
+        if (v == 1) ov.pair.final_criterion = SASNAV_FINAL_ETA;
+        if (v == 2) ov.pair.joint_contrast_max = 3.0;
+        if (v == 3) ov.pair.verdict_coincidence = 0.1;
+        none = (record_log){0};
+        ov.progress_user = &none;
+        CHECK_OK(sasnav_navigate(run, &ov, &nav));
+        CHECK(none.resumed == 0 && none.n == npairs, "records used under other options (case %d: %d)", v,
+              none.resumed);
+        sasnav_navigation_free(&nav);
+    }
     o.progress_user = &none;
-    CHECK_OK(sasnav_navigate(run, &o, &nav));
-    CHECK(none.resumed == 0 && none.n == npairs, "records used under other options (%d)", none.resumed);
-    sasnav_navigation_free(&nav);
-    o.pair.k = o.pair.coarse_k;
 
     /* Same pings in a sub-run (pings 1..): the keys still match. */
     sasnav_run *sub = NULL;

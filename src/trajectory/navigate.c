@@ -231,6 +231,19 @@ static uint64_t options_digest(const sasnav_run *run, const sasnav_navigate_opts
                                po->verdict_eta_max, po->verdict_margin_min, po->op.tolerance,
                                po->op.oversampling, po->verdict_coincidence, 0, 0, 0, 0, 0};
         h = sasnav_hash_doubles(h, pd, 31);
+        /* the final stage's criterion and the joint misfit's settings (and
+         * the contrast that also gates the coincidence rule); keys of
+         * earlier versions, which left them out, were made with the
+         * defaults and stay theirs */
+        sasnav_pair_opts def;
+        sasnav_pair_default_opts(&def);
+        if (po->final_criterion != def.final_criterion || po->joint_k != def.joint_k ||
+            po->joint_mu != def.joint_mu || po->joint_shift_max != def.joint_shift_max ||
+            po->joint_contrast_max != def.joint_contrast_max || po->joint_eta_ratio != def.joint_eta_ratio) {
+            const double fd[6] = {(double)po->final_criterion, (double)po->joint_k, po->joint_mu,
+                                  po->joint_shift_max, po->joint_contrast_max, po->joint_eta_ratio};
+            h = sasnav_hash_doubles(h, fd, 6);
+        }
         /* GPU estimates agree with the CPU's to float rounding, not to the
          * bit: a checkpoint of one is not resumed by the other (CPU keys
          * are those of earlier versions) */
