@@ -70,6 +70,17 @@ static void test_choose(void)
     all = 1;
     for (int j = 0; j < N; j++) all &= choice[j] == 1;
     CHECK(all, "aiding: a slipped candidate was chosen");
+    /* Costs that overflow (an aiding value far out against a tiny sigma)
+     * still leave a choice of an existing option for every pair: before,
+     * a pair after one whose every cost was infinite got option -1. */
+    a[2] = (sasnav_pose){1e300, 0, 0};
+    sa[2] = (sasnav_pose){1e-300, 1e-3, 1e-3};
+    for (int j = 0; j < N; j++) choice[j] = -7;
+    CHECK_OK(fuse_choose(N, opts, nopt, a, sa, motion, 20.0, choice));
+    int in_range = 1;
+    for (int j = 0; j < N; j++) in_range &= choice[j] >= 0 && choice[j] < nopt[j];
+    CHECK(in_range, "infinite costs: choices %d %d %d %d out of range", choice[1], choice[2], choice[3],
+          choice[4]);
 }
 
 /* Dense reference: the normal equations of

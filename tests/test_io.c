@@ -454,13 +454,16 @@ static void test_aiding(void)
     CHECK_OK(sasnav_run_write(good, run));
     struct {
         const char *name, *dataset, *expect;
-        int kind; /* 0 poke NaN, 1 short dataset, 2 negative sigma, 3 zero sigma, 4 times, 5 drop sigma */
+        int kind; /* 0 poke NaN, 1 short dataset, 2 negative sigma, 3 zero sigma, 4 times, 5 drop sigma,
+                     6 absurd value, 7 tiny sigma (both finite: they overflowed the fusion's costs) */
     } cases[] = {{"aiding-nan.h5", "/aiding/yaw_rate", "not finite", 0},
                  {"aiding-short.h5", "/aiding/velocity", "/aiding/velocity", 1},
-                 {"aiding-negative.h5", "/aiding/yaw_rate_sigma", "must be > 0", 2},
-                 {"aiding-zero.h5", "/aiding/velocity_sigma", "must be > 0", 3},
+                 {"aiding-negative.h5", "/aiding/yaw_rate_sigma", "standard deviation", 2},
+                 {"aiding-zero.h5", "/aiding/velocity_sigma", "standard deviation", 3},
                  {"aiding-time.h5", "/aiding/time", "must increase", 4},
-                 {"aiding-nosigma.h5", "/aiding/yaw_rate_sigma", "come together", 5}};
+                 {"aiding-nosigma.h5", "/aiding/yaw_rate_sigma", "come together", 5},
+                 {"aiding-huge.h5", "/aiding/yaw_rate", "beyond", 6},
+                 {"aiding-tiny.h5", "/aiding/velocity_sigma", "standard deviation", 7}};
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
         const char *path = tmp_file(cases[c].name);
         CHECK_OK(sasnav_run_write(path, run));
@@ -478,6 +481,8 @@ static void test_aiding(void)
         case 3: v = 0.0; poke(f, cases[c].dataset, H5T_NATIVE_DOUBLE, 5, 2, &v); break;
         case 4: v = 0.1; poke(f, cases[c].dataset, H5T_NATIVE_DOUBLE, 3, 1, &v); break;
         case 5: H5Ldelete(f, cases[c].dataset, H5P_DEFAULT); break;
+        case 6: v = 1e300; poke(f, cases[c].dataset, H5T_NATIVE_DOUBLE, 2, 1, &v); break;
+        case 7: v = 1e-300; poke(f, cases[c].dataset, H5T_NATIVE_DOUBLE, 3, 2, &v); break;
         }
         H5Fclose(f);
         CHECK_FAILS(sasnav_run_read(path, &back), SASNAV_ERR_FORMAT);

@@ -174,15 +174,26 @@ int sasnav_run_alloc_aiding(sasnav_run *run, int with_yaw_rate, int with_velocit
 }
 
 /* Values finite, standard deviations > 0 or +inf. */
-static int aiding_values_check(const double *v, const double *sigma, size_t n, const char *what)
+/* Plausible aiding (docs/format.md, "/aiding"): values within `max` in
+ * magnitude (a vehicle's speed, a turn rate), standard deviations in
+ * [SIGMA_MIN, SIGMA_MAX] or +inf (no measurement). Finite but absurd values
+ * would overflow the fusion's costs and weights. */
+#define AIDING_SIGMA_MIN 1e-12
+#define AIDING_SIGMA_MAX 1e6
+#define AIDING_YAW_RATE_MAX 10.0 /* rad/s */
+#define AIDING_TIME_MAX 1e10     /* s: |time| (three centuries) */
+
+static int aiding_values_check(const double *v, const double *sigma, size_t n, double max, const char *what)
 {
     for (size_t k = 0; k < n; k++) {
         if (!isfinite(v[k]))
             return sasnav_set_error(SASNAV_ERR_ARG, "aiding %s entry %zu is not finite", what, k);
-        if (!(sigma[k] > 0))
+        if (!(fabs(v[k]) <= max))
+            return sasnav_set_error(SASNAV_ERR_ARG, "aiding %s entry %zu is %g, beyond +-%g", what, k, v[k], max);
+        if (!(sigma[k] >= AIDING_SIGMA_MIN && (sigma[k] <= AIDING_SIGMA_MAX || sigma[k] == INFINITY)))
             return sasnav_set_error(SASNAV_ERR_ARG,
-                                    "aiding %s standard deviation %zu must be > 0 (got %g)", what, k,
-                                    sigma[k]);
+                                    "aiding %s standard deviation %zu must be in [%g, %g] or inf (got %g)",
+                                    what, k, AIDING_SIGMA_MIN, AIDING_SIGMA_MAX, sigma[k]);
     }
     return SASNAV_OK;
 }
@@ -192,8 +203,9 @@ int sasnav_aiding_check(const sasnav_aiding *a, int n_pings)
     if (!a) return SASNAV_OK;
     if (n_pings < 1 || !a->time) return sasnav_set_error(SASNAV_ERR_ARG, "aiding has no ping times");
     for (int p = 0; p < n_pings; p++) {
-        if (!isfinite(a->time[p]))
-            return sasnav_set_error(SASNAV_ERR_ARG, "aiding time of ping %d is not finite", p);
+        if (!(fabs(a->time[p]) <= AIDING_TIME_MAX))
+            return sasnav_set_error(SASNAV_ERR_ARG, "aiding time of ping %d (%g s) is not finite or beyond +-%g s",
+                                    p, a->time[p], AIDING_TIME_MAX);
         if (p > 0 && !(a->time[p] > a->time[p - 1]))
             return sasnav_set_error(SASNAV_ERR_ARG,
                                     "aiding times must increase (ping %d at %g s, ping %d at %g s)",
@@ -202,9 +214,11 @@ int sasnav_aiding_check(const sasnav_aiding *a, int n_pings)
     if (!a->yaw_rate != !a->yaw_rate_sigma || !a->velocity != !a->velocity_sigma)
         return sasnav_set_error(SASNAV_ERR_ARG, "aiding values without standard deviations");
     int rc = SASNAV_OK;
-    if (a->yaw_rate) rc = aiding_values_check(a->yaw_rate, a->yaw_rate_sigma, (size_t)n_pings, "yaw rate");
+    if (a->yaw_rate)
+        rc = aiding_values_check(a->yaw_rate, a->yaw_rate_sigma, (size_t)n_pings, AIDING_YAW_RATE_MAX, "yaw rate");
     if (!rc && a->velocity)
-        rc = aiding_values_check(a->velocity, a->velocity_sigma, 2 * (size_t)n_pings, "velocity");
+        rc = aiding_values_check(a->velocity, a->velocity_sigma, 2 * (size_t)n_pings, SASNAV_SPEED_MAX,
+                                 "velocity");
     return rc;
 }
 

@@ -79,7 +79,10 @@ int fuse_choose(int n, fuse_option *const *opts, const int *nopt, const sasnav_p
             double best = 0;
             int arg = -1;
             if (j > 0) {
+                /* the first option unless a cost is lower: non-finite
+                 * costs (absurd aiding values) must not leave no choice */
                 best = HUGE_VAL;
+                arg = 0;
                 for (int b = 0; b < nopt[j - 1]; b++) {
                     double t = cost[(size_t)(j - 1) * width + b] + half_chi2(o->e, opts[j - 1][b].e, motion);
                     if (t < best) {
@@ -159,10 +162,12 @@ int fuse_smooth_bias(int n, const sasnav_pose *m, const sasnav_pose *sm, const s
                 double w2 = isfinite(s2) ? 1.0 / (s2 * s2) : 0.0;
                 d[j] = prior_w + w1 + w2 + (j > 0 ? wm : 0.0) + (j + 1 < n ? wm : 0.0);
                 o[j] = -wm;
-                b[j] = w1 * comp(m[j], k) + w2 * comp(a[j], k);
+                /* (a term without weight adds nothing, even where its
+                 * value is not finite) */
+                b[j] = (w1 > 0 ? w1 * comp(m[j], k) : 0.0) + (w2 > 0 ? w2 * comp(a[j], k) : 0.0);
                 u[j] = w2;
                 sum_wa += w2;
-                sum_wa_a += w2 * comp(a[j], k);
+                sum_wa_a += w2 > 0 ? w2 * comp(a[j], k) : 0.0;
             }
             if (with_bias && sum_wa > 0) {
                 /* Bordered system: T e + u b = r, u^T e + beta b = s. Solve
