@@ -292,6 +292,18 @@ static void test_survey(void)
     rp.density = 20;
     rp.ripple_depth = 2;
     CHECK(sasnav_scene_survey(&rp, 0, NULL, NULL, NULL, &a) == SASNAV_ERR_ARG, "ripple depth 2 is refused");
+    /* A huge extent at a tiny density: the rock count once overflowed a
+     * long into a negative total that passed the size check (a heap
+     * overflow under ASan); refused, nothing allocated. */
+    sasnav_ripple_params huge = sc.ripples;
+    huge.x_min = 0;
+    huge.x_max = 1e10;
+    huge.y_min = 1;
+    huge.y_max = 1e12;
+    huge.density = 1e-30;
+    a = NULL;
+    CHECK(sasnav_scene_survey(&huge, 0, NULL, NULL, NULL, &a) == SASNAV_ERR_ARG && a == NULL,
+          "a 1e10 x 1e12 m survey scene accepted");
     /* Two pings over a short stretch of seabed. */
     sc.traj.n_pings = 2;
     sc.ripples.x_max = 10;

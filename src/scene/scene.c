@@ -109,11 +109,14 @@ int sasnav_scene_survey(const sasnav_ripple_params *p, int max_targets, double *
         !isfinite(p->ripple_angle) || !(p->ripple_depth >= 0 && p->ripple_depth <= 1) ||
         !(p->background >= 0) || !isfinite(p->background))
         return sasnav_set_error(SASNAV_ERR_ARG, "invalid survey scene parameters");
+    /* Counts in double first: a huge extent must be refused, not overflow
+     * a cast into a negative count (a heap overflow, found by review). */
     double area = w * h, n_bg = area * p->density;
-    long n_rocks = (long)floor(area / ROCK_AREA), n_tg = (long)floor(w / TARGET_SPACING);
-    double count = n_bg + (double)n_rocks * ROCK_POINTS + (double)n_tg * 2 * CYL_POINTS;
-    if (count > 5e7)
+    double rocks = floor(area / ROCK_AREA), tgs = floor(w / TARGET_SPACING);
+    double count = n_bg + rocks * ROCK_POINTS + tgs * 2 * CYL_POINTS;
+    if (!(count <= 5e7))
         return sasnav_set_error(SASNAV_ERR_ARG, "scene would hold %.3g scatterers (max 5e7)", count);
+    long n_rocks = (long)rocks, n_tg = (long)tgs;
     int rc = scene_alloc((int)ceil(count) + 1, scene);
     if (rc) return rc;
     sasnav_scene *s = *scene;

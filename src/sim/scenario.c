@@ -6,6 +6,9 @@
 #include <stdio.h>
 #include <string.h>
 
+/* m: |x|, |y| of a simulated scene's corners (a survey line of 100 km) */
+#define SCENE_EXTENT_MAX 1e5
+
 static void base_paper(sasnav_scenario *sc)
 {
     memset(sc, 0, sizeof *sc);
@@ -240,6 +243,10 @@ int sasnav_scenario_check(const sasnav_scenario *sc)
         if (!(r->x_max > r->x_min) || !(r->y_max > r->y_min) || !(r->density > 0) ||
             !isfinite(r->x_min + r->x_max + r->y_min + r->y_max + r->density))
             return sasnav_set_error(SASNAV_ERR_ARG, "ripple scene extent/density invalid");
+        double big = fmax(fmax(fabs(r->x_min), fabs(r->x_max)), fmax(fabs(r->y_min), fabs(r->y_max)));
+        if (!(big <= SCENE_EXTENT_MAX))
+            return sasnav_set_error(SASNAV_ERR_ARG, "scene corners must lie within +-%g m (got %g m)",
+                                    SCENE_EXTENT_MAX, big);
         if (sc->traj.circle_radius > 0) {
             double ax = fmax(fabs(r->x_min), fabs(r->x_max)), ay = fmax(fabs(r->y_min), fabs(r->y_max));
             if (!(hypot(ax, ay) < sc->traj.circle_radius))
