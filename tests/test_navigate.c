@@ -642,6 +642,38 @@ static void test_trust_point(void)
         }
         sasnav_navigation_free(&nav);
     }
+    /* A coarse aiding (sigmas 1e4 times larger: its gate wider than half a
+     * slip) agrees with slipped candidates too: it must not settle any
+     * ambiguity, so no pair the estimator flagged comes out "ok". */
+    {
+        sasnav_aiding *ad = run->aiding;
+        for (int p = 0; p < run->n_pings; p++) {
+            ad->yaw_rate_sigma[p] *= 1e4;
+            ad->velocity_sigma[2 * p] *= 1e4;
+            ad->velocity_sigma[2 * p + 1] *= 1e4;
+        }
+        sasnav_navigate_opts o;
+        sasnav_navigate_default_opts(&o);
+        o.pair.k = o.pair.coarse_k;
+        o.pair.i = o.pair.coarse_i;
+        o.pair.range_extent = 0.6;
+        sasnav_navigation nav;
+        CHECK_OK(sasnav_navigate(run, &o, &nav));
+        int settled = 0, flagged = 0;
+        for (int j = 0; j < nav.n_pairs; j++) {
+            flagged += nav.pairs[j].first_verdict != SASNAV_VERDICT_OK;
+            settled += nav.pairs[j].first_verdict != SASNAV_VERDICT_OK && nav.pairs[j].verdict == SASNAV_VERDICT_OK;
+        }
+        printf("  point, coarse aiding: %d of %d pairs flagged by the estimator, %d of them made ok\n", flagged,
+               nav.n_pairs, settled);
+        CHECK(flagged >= 1 && settled == 0, "coarse aiding settled %d of %d flagged pairs", settled, flagged);
+        sasnav_navigation_free(&nav);
+        for (int p = 0; p < run->n_pings; p++) {
+            ad->yaw_rate_sigma[p] /= 1e4;
+            ad->velocity_sigma[2 * p] /= 1e4;
+            ad->velocity_sigma[2 * p + 1] /= 1e4;
+        }
+    }
     /* Navigation by aiding alone needs aiding; bad aiding is refused. */
     sasnav_navigate_opts o;
     sasnav_navigate_default_opts(&o);

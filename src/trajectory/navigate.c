@@ -314,6 +314,15 @@ static const sasnav_pair_record *find_record(const nav_ctx *ctx, uint64_t key)
 
 static int take_result(const nav_ctx *ctx, sasnav_navigate_pair *np, int rc);
 
+/* A result given back by the caller (records, a reused navigation) is
+ * read with its candidate count within the array (found by review). */
+static void clamp_candidates(sasnav_pair_result *r)
+{
+    if (r->n_candidates < 0) r->n_candidates = 0;
+    if (r->n_candidates > SASNAV_PAIR_MAX_CANDIDATES) r->n_candidates = SASNAV_PAIR_MAX_CANDIDATES;
+    if (r->chosen >= r->n_candidates) r->chosen = r->n_candidates - 1;
+}
+
 /* Estimates pair (p, q) into *np (or takes it from ctx->done: *resumed
  * = 1). Returns a fatal code, else SASNAV_OK with np->status telling how
  * the pair went. *key: the pair's content key. */
@@ -338,6 +347,7 @@ static int estimate_pair(nav_ctx *ctx, int t, int j, int p, int q, sasnav_naviga
     const sasnav_pair_record *rec = ctx->n_done > 0 ? find_record(ctx, *key) : NULL;
     if (rec) {
         np->result = rec->result;
+        clamp_candidates(&np->result);
         np->status = rec->status;
         np->first_result = np->result;
         np->first_status = np->status;
@@ -355,6 +365,7 @@ static int estimate_pair(nav_ctx *ctx, int t, int j, int p, int q, sasnav_naviga
             found = !sasnav_navigation_pair(reuse, i, &old) && old.p == p && old.q == q;
         if (!found) return sasnav_set_error(SASNAV_ERR_ARG, "navigate: the reused navigation has no pair %d-%d", p, q);
         np->result = old.first_result;
+        clamp_candidates(&np->result);
         np->status = old.first_status;
         np->first_result = np->result;
         np->first_status = np->status;
@@ -412,6 +423,8 @@ static int take_result(const nav_ctx *ctx, sasnav_navigate_pair *np, int rc)
         double seconds = np->result.seconds;
         memset(&np->result, 0, sizeof np->result);
         np->result.status = rc;
+        /* not "ok" (0): passes that read the first verdict must skip it */
+        np->result.verdict = rc == SASNAV_ERR_NO_OVERLAP ? SASNAV_VERDICT_NO_OVERLAP : SASNAV_VERDICT_FAILED;
         np->result.displacement = np->nominal;
         np->result.seconds = seconds;
         np->status = rc;
@@ -642,6 +655,17 @@ static int agrees(const nav_ctx *ctx, sasnav_pose u, sasnav_pose v, sasnav_pose 
     return 1;
 }
 
+/* The aiding can settle a pair's ambiguity (or confirm an estimate
+ * without verdict) only where its own gate, gate x sigma, is narrower than
+ * half a slip in surge and in yaw: a coarser aiding "agrees" with a
+ * slipped candidate as well (found by review). */
+static int aiding_settles(const nav_ctx *ctx, sasnav_pose sa)
+{
+    double gate = ctx->opts->aiding_gate;
+    double d = ctx->pc_spacing, r = ctx->run->range_of_interest > 0 ? ctx->run->range_of_interest : 1.0;
+    return isfinite(sa.x) && isfinite(sa.theta) && gate * sa.x < 0.5 * d && gate * sa.theta < 0.5 * d / r;
+}
+
 /* Makes a new estimate r of the pair its result: the new values, the
  * first estimate's candidates, ambiguity and margin (what the data
  * offered), time and cost added. */
@@ -868,7 +892,7 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
         int agree = agrees(ctx, np->result.error, a[j], sa[j]);
         if (ok_alone && agree) {
             if (with_aiding && (np->verdict == SASNAV_VERDICT_AMBIGUOUS || np->verdict == SASNAV_VERDICT_UNCHECKED) &&
-                isfinite(sa[j].x + sa[j].theta))
+                aiding_settles(ctx, sa[j]))
                 np->verdict = SASNAV_VERDICT_OK; /* the aiding settles the ambiguity, or
                                                     confirms an estimate without verdict */
             rc = put_pair(ctx, j, np);
@@ -892,7 +916,11 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
              * agree with it), or a local estimate from the motion model's
              * prediction that no candidate competition has tested:
              * ambiguous at best. */
-            if (with_aiding && isfinite(sa[j].x + sa[j].theta) && np->result.verdict != SASNAV_VERDICT_NO_OVERLAP)
+            /* (the aiding settles which candidate, not whether the data
+             * fit: a new estimate that itself failed stays failed; found
+             * by review, a failed pair came out "ok") */
+            if (with_aiding && aiding_settles(ctx, sa[j]) &&
+                (np->result.verdict == SASNAV_VERDICT_OK || np->result.verdict == SASNAV_VERDICT_AMBIGUOUS))
                 np->verdict = SASNAV_VERDICT_OK;
             else
                 np->verdict = worse(SASNAV_VERDICT_AMBIGUOUS, np->result.verdict);
@@ -965,12 +993,14 @@ static void speed_lags(const nav_ctx *ctx, int from_dvl, double *lags)
             double dt0 = p > 0 ? ad->time[p] - ad->time[p - 1] : 0;
             double dt1 = p + 1 < n ? ad->time[p + 1] - ad->time[p] : 0;
             double sum = 0, w = 0;
-            if (p > 0) {
+            /* (intervals without a measurement, sigma +inf, skipped: their
+             * value is not a speed) */
+            if (p > 0 && isfinite(ad->velocity_sigma[2 * p])) {
                 sasnav_pose nom = sasnav_ping_displacement(&run->nav[p - 1], &run->nav[p]);
                 sum += ad->velocity[2 * p] * dt0 / fabs(nom.x) - 1.0;
                 w += 1;
             }
-            if (p + 1 < n) {
+            if (p + 1 < n && isfinite(ad->velocity_sigma[2 * (p + 1)])) {
                 sasnav_pose nom = sasnav_ping_displacement(&run->nav[p], &run->nav[p + 1]);
                 sum += ad->velocity[2 * (p + 1)] * dt1 / fabs(nom.x) - 1.0;
                 w += 1;
@@ -1134,10 +1164,7 @@ static int pairs_tx_yaw(const nav_ctx *ctx, int n_pairs, double *tx_yaw, int *us
         sasnav_navigate_pair np;
         get_pair(ctx, j, &np);
         double len = np.q == np.p + 1 ? s[np.q] - s[np.p] : 0.0;
-        /* yaw rates from ok pairs, and from pairs ambiguous only for their
-         * surge at a coincidence (their yaw is an ok pair's) */
-        int yaw_ok = np.first_verdict == SASNAV_VERDICT_OK || coincidence_only(ctx, np.first_verdict, &np);
-        if (!yaw_ok || !usable(&np) || !(len > 0)) continue;
+        if (np.first_verdict != SASNAV_VERDICT_OK || !usable(&np) || !(len > 0)) continue;
         rate[np.q] = np.result.displacement.theta / len;
         valid[np.q] = isfinite(rate[np.q]) != 0;
         *used += valid[np.q];
@@ -1414,7 +1441,7 @@ static int navigate_run(const sasnav_run *run, const sasnav_navigate_opts *opts,
         po.tx_lag = run->tx_lag;
         po.nthreads = ctx.n_workers > 1 ? 1 : opts->nthreads;
         ctx.estimators = calloc((size_t)ctx.n_workers, sizeof *ctx.estimators);
-        if (!ctx.estimators) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        if (!ctx.estimators) rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory"); /* freed below */
         for (int t = 0; t < ctx.n_workers && !rc; t++)
             rc = sasnav_pair_create(&run->sys, &run->array, &run->win, &po, &ctx.estimators[t]);
     }
