@@ -819,6 +819,41 @@ static void test_bad_run_files(void)
     H5Fclose(f);
     CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
     CHECK(strstr(sasnav_last_error(), "incomplete") != NULL, "message should say the data is incomplete");
+    /* /raw compressed, chunk by ping, only ping 0 written (a writer that
+     * died): the storage is within the compression's bounds, but chunks
+     * are missing; their samples would read as zeros */
+    path = fresh_run_file("partial-gzip.h5", 0);
+    f = open_rw(path);
+    H5Ldelete(f, "/raw", H5P_DEFAULT);
+    {
+        hsize_t dims[3] = {4, 3, 16}, ck[3] = {1, 3, 16}, at[3] = {0, 0, 0};
+        hid_t sp = H5Screate_simple(3, dims, NULL), pl = H5Pcreate(H5P_DATASET_CREATE);
+        H5Pset_chunk(pl, 3, ck);
+        H5Pset_deflate(pl, 6);
+        hid_t ds = H5Dcreate2(f, "/raw", c32, sp, H5P_DEFAULT, pl, H5P_DEFAULT);
+        hid_t ms = H5Screate_simple(3, ck, NULL);
+        H5Sselect_hyperslab(sp, H5S_SELECT_SET, at, NULL, ck, NULL);
+        float one[2 * 3 * 16];
+        for (int k = 0; k < 2 * 3 * 16; k++) one[k] = 0.25f * (float)(k % 7) - 0.5f;
+        CHECK(H5Dwrite(ds, c32, ms, sp, H5P_DEFAULT, one) >= 0, "cannot write ping 0");
+        H5Sclose(ms);
+        H5Dclose(ds);
+        H5Pclose(pl);
+        H5Sclose(sp);
+    }
+    H5Fclose(f);
+    CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
+    CHECK(strstr(sasnav_last_error(), "chunks written") != NULL, "partial compressed /raw: '%s'",
+          sasnav_last_error());
+    /* a link out of the file (another file, or a FIFO that would block the
+     * reader for ever): refused at open */
+    path = fresh_run_file("external.h5", 0);
+    f = open_rw(path);
+    CHECK(H5Lcreate_external("elsewhere.h5", "/truth", f, "/truth_link", H5P_DEFAULT, H5P_DEFAULT) >= 0,
+          "cannot make an external link");
+    H5Fclose(f);
+    CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
+    CHECK(strstr(sasnav_last_error(), "external") != NULL, "external link: '%s'", sasnav_last_error());
     /* a dataset created but never written */
     path = fresh_run_file("unwritten.h5", 0);
     f = open_rw(path);

@@ -210,6 +210,16 @@ static int is_hdf5(const char *path)
 #endif
 }
 
+/* H5Lvisit: stops (1) at the first link that is neither hard nor soft,
+ * its name into data (256 bytes). */
+static herr_t link_outside(hid_t group, const char *name, const H5L_info_t *info, void *data)
+{
+    (void)group;
+    if (info->type == H5L_TYPE_HARD || info->type == H5L_TYPE_SOFT) return 0;
+    snprintf((char *)data, 256, "%s", name);
+    return 1;
+}
+
 int h5_open_read(h5_ctx *c, const char *const *formats, int n_formats)
 {
     struct stat st;
@@ -243,6 +253,15 @@ int h5_open_read(h5_ctx *c, const char *const *formats, int n_formats)
     if (!known)
         return h5_fail(c, SASNAV_ERR_FORMAT, "root attribute 'format' is \"%s\", expected \"%s\"",
                        format, formats[0]);
+    /* Links out of the file (external, user-defined) are refused: reading
+     * through one opens another file, or blocks for ever on a FIFO (found
+     * by review). Hard and soft links stay within this file. */
+    char outside[256] = "";
+    herr_t visited = H5Lvisit(c->file, H5_INDEX_NAME, H5_ITER_NATIVE, link_outside, outside);
+    if (visited > 0)
+        return h5_fail(c, SASNAV_ERR_FORMAT, "/%s is a link out of the file (external links are not supported)",
+                       outside);
+    if (visited < 0) return h5_fail_lib(c, SASNAV_ERR_FORMAT, "corrupt HDF5 file: its links cannot be listed");
     int version;
     rc = h5_read_attr_int(c, "/", "format_version", &version);
     if (rc) return rc;
@@ -472,10 +491,29 @@ static int storage_check(h5_ctx *c, hid_t dset, const char *name)
     }
     double expected = (double)H5Sget_simple_extent_npoints(space) * (double)H5Tget_size(type);
     double stored = (double)H5Dget_storage_size(dset);
-    if (stored <= 0 || (!compressed && stored < expected) || (compressed && expected > EXPANSION_MAX * stored))
+    if (stored <= 0 || (!compressed && stored < expected) || (compressed && expected > EXPANSION_MAX * stored)) {
         rc = h5_fail(c, SASNAV_ERR_FORMAT,
                      "%s: file stores %.0f bytes for %.0f bytes of data (truncated or incomplete)", name,
                      stored, expected);
+        goto done;
+    }
+    if (layout == H5D_CHUNKED) {
+        /* Every chunk written: a compressed dataset of which a writer
+         * stored only some chunks passes the size test above, and its
+         * missing chunks would read as the fill value (found by review). */
+        int rank = H5Sget_simple_extent_ndims(space);
+        hsize_t dims[H5S_MAX_RANK], chunk[H5S_MAX_RANK], have = 0;
+        double need = 1;
+        if (rank < 1 || rank > H5S_MAX_RANK || H5Sget_simple_extent_dims(space, dims, NULL) < 0 ||
+            H5Pget_chunk(dcpl, rank, chunk) != rank || H5Dget_num_chunks(dset, space, &have) < 0) {
+            rc = h5_fail_lib(c, SASNAV_ERR_FORMAT, "cannot inspect the chunks of %s", name);
+            goto done;
+        }
+        for (int k = 0; k < rank; k++) need *= chunk[k] > 0 ? ceil((double)dims[k] / (double)chunk[k]) : 0;
+        if ((double)have < need)
+            rc = h5_fail(c, SASNAV_ERR_FORMAT, "%s: %.0f of its %.0f chunks written (truncated or incomplete)",
+                         name, (double)have, need);
+    }
 done:
     H5Eclear2(H5E_DEFAULT);
     close_id(&space, H5Sclose);
