@@ -263,6 +263,23 @@ static void test_nav_round_trip(void)
         CHECK(rn && memcmp(rn, nav, sizeof nav) == 0, "nav read without truth differs");
         free(rn);
     }
+    /* An implausible pose (finite, 1e300 m away) is refused by the reader,
+     * as in a run (before, `image --nav` cast it into a grid size). */
+    {
+        hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+        hid_t d = H5Dopen2(f, "/nav/array", H5P_DEFAULT);
+        double v[N * 3];
+        H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v);
+        v[3 * 4] = 1e300;
+        H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v);
+        H5Dclose(d);
+        H5Fclose(f);
+        int n = 0;
+        sasnav_ping_pose *rn = NULL, *rt = NULL;
+        CHECK_FAILS(sasnav_nav_read(path, &n, &rn, &rt), SASNAV_ERR_FORMAT);
+        CHECK(rn == NULL && strstr(sasnav_last_error(), "ping 4") != NULL, "implausible nav: '%s'",
+              sasnav_last_error());
+    }
     /* A nav file is not a run. */
     sasnav_run *run = (sasnav_run *)1;
     CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);

@@ -131,6 +131,12 @@ size_t sasnav_run_ping_size(const sasnav_run *run);
  * each ping is read (by its source), not here. */
 int sasnav_run_check(const sasnav_run *run);
 
+/* Plausible ping poses (what sasnav_run_check asks of a run's navigation
+ * and truth): finite, within Earth scale (|x|, |y| <= SASNAV_POSITION_MAX_M),
+ * the transmitter within SASNAV_SIZE_MAX_M of the array in each ping.
+ * SASNAV_ERR_ARG naming `what` and the ping. */
+int sasnav_poses_check(const sasnav_ping_pose *poses, int n, const char *what);
+
 /* sasnav_run_check without the samples (a run's header: shapes,
  * constants, navigation, truth, aiding; raw and source may be absent). */
 int sasnav_run_check_header(const sasnav_run *run);

@@ -229,9 +229,7 @@ static int pose_placed(sasnav_pose a)
     return fabs(a.x) <= SASNAV_POSITION_MAX_M && fabs(a.y) <= SASNAV_POSITION_MAX_M;
 }
 
-/* Finite poses, within Earth scale, with the transmitter within
- * SASNAV_SIZE_MAX_M of the array in each ping. */
-static int poses_check(const sasnav_ping_pose *poses, int n, const char *what)
+int sasnav_poses_check(const sasnav_ping_pose *poses, int n, const char *what)
 {
     for (int p = 0; p < n; p++) {
         if (!pose_finite(poses[p].tx) || !pose_finite(poses[p].array))
@@ -334,10 +332,10 @@ static int run_check(const sasnav_run *run, int samples)
                                 "(plausible: 0..%g m)",
                                 run->win.t0, run->win.n_samples, run->sys.sample_rate,
                                 0.5 * run->sys.sound_speed * t_end, SASNAV_RANGE_MAX_M);
-    rc = poses_check(run->nav, run->n_pings, "navigation");
+    rc = sasnav_poses_check(run->nav, run->n_pings, "navigation");
     if (rc) return rc;
     if (run->truth) {
-        rc = poses_check(run->truth, run->n_pings, "true pose");
+        rc = sasnav_poses_check(run->truth, run->n_pings, "true pose");
         if (rc) return rc;
     }
     rc = sasnav_aiding_check(run->aiding, run->n_pings);

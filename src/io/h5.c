@@ -702,6 +702,13 @@ static int nav_read_open(h5_ctx *c, int *n_pings, sasnav_ping_pose **nav, sasnav
     if (!pn || (with_truth && !pt)) rc = h5_fail(c, SASNAV_ERR_NOMEM, "cannot allocate %d poses", n);
     if (!rc) rc = poses_read(c, "/nav", n, pn);
     if (!rc && with_truth) rc = poses_read(c, "/truth", n, pt);
+    /* the runs' plausibility (a position of 1e300 m read, then cast into
+     * a grid size, was undefined behaviour; found by review) */
+    char why[256];
+    if (!rc && (sasnav_poses_check(pn, n, "navigation") || (with_truth && sasnav_poses_check(pt, n, "true pose")))) {
+        snprintf(why, sizeof why, "%s", sasnav_last_error()); /* h5_fail rewrites that buffer */
+        rc = h5_fail(c, SASNAV_ERR_FORMAT, "%s", why);
+    }
     if (rc) {
         free(pn);
         free(pt);
