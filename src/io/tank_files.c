@@ -147,8 +147,8 @@ void sasnav_tank_default_read_opts(sasnav_tank_read_opts *o)
  * line of values; overrides the options. */
 static int read_array_csv(const char *path, sasnav_tank_read_opts *o)
 {
-    FILE *f = fopen(path, "r");
-    if (!f) return sasnav_set_error(SASNAV_ERR_IO, "cannot open %s", path);
+    FILE *f = sasnav_fopen_regular(path);
+    if (!f) return SASNAV_ERR_IO;
     char head[256];
     double sp, el;
     int dir, ok = fgets(head, sizeof head, f) != NULL &&
@@ -172,14 +172,12 @@ static int read_wav(const char *path, int *n_ch, int *n_frames, int *rate, float
     *data = NULL;
     SF_INFO info;
     memset(&info, 0, sizeof info);
-    SNDFILE *f = sf_open(path, SFM_READ, &info);
-    if (!f) {
-        struct stat st;
-        if (stat(path, &st))
-            return sasnav_set_error(SASNAV_ERR_IO, "cannot open %s: %s", path, strerror(errno));
+    int fd = sasnav_open_regular(path);
+    if (fd < 0) return SASNAV_ERR_IO;
+    SNDFILE *f = sf_open_fd(fd, SFM_READ, &info, 1); /* closes fd */
+    if (!f)
         return sasnav_set_error(SASNAV_ERR_FORMAT, "%s is not a readable sound file: %s", path,
                                 sf_strerror(NULL));
-    }
     int rc = SASNAV_OK;
     if (info.frames <= 0)
         rc = sasnav_set_error(SASNAV_ERR_FORMAT, "%s is empty (no samples)", path);
@@ -225,8 +223,8 @@ static int read_poses_csv(const char *path, sasnav_ping_pose **poses, int *n)
 {
     *poses = NULL;
     *n = 0;
-    FILE *f = fopen(path, "r");
-    if (!f) return sasnav_set_error(SASNAV_ERR_IO, "cannot open %s: %s", path, strerror(errno));
+    FILE *f = sasnav_fopen_regular(path);
+    if (!f) return SASNAV_ERR_IO;
     char line[512];
     int cap = 0, rc = SASNAV_OK, lineno = 0;
     sasnav_ping_pose *v = NULL;

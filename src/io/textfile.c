@@ -5,6 +5,7 @@
 #include "sasnav/io.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -75,14 +76,46 @@ void sasnav_text_abort(sasnav_text_out *out)
     sasnav_partial_remove(out->partial);
 }
 
+int sasnav_open_regular(const char *path)
+{
+    /* O_NONBLOCK: opening a FIFO without a writer returns at once (a
+     * blocking open waits for ever, found by review); then refused */
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        sasnav_set_error(SASNAV_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+        return -1;
+    }
+    struct stat st;
+    int flags = fcntl(fd, F_GETFL);
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || flags < 0 ||
+        fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) < 0) {
+        close(fd);
+        sasnav_set_error(SASNAV_ERR_IO, "%s: not a regular file", path);
+        return -1;
+    }
+    return fd;
+}
+
+FILE *sasnav_fopen_regular(const char *path)
+{
+    int fd = sasnav_open_regular(path);
+    if (fd < 0) return NULL;
+    FILE *f = fdopen(fd, "rb");
+    if (!f) {
+        sasnav_set_error(SASNAV_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+        close(fd);
+    }
+    return f;
+}
+
 int sasnav_text_read(const char *path, long max_bytes, int bad_content, char **text, size_t *len)
 {
     *text = NULL;
     if (len) *len = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f) return sasnav_set_error(SASNAV_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    FILE *f = sasnav_fopen_regular(path);
+    if (!f) return SASNAV_ERR_IO;
     struct stat st;
-    if (fstat(fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) {
+    if (fstat(fileno(f), &st) != 0) {
         fclose(f);
         return sasnav_set_error(SASNAV_ERR_IO, "%s: not a regular file", path);
     }

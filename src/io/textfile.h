@@ -16,6 +16,13 @@ typedef struct {
     int partial;     /* slot of tmp among the outputs in progress */
 } sasnav_text_out;
 
+/* Opens a regular file for reading: never blocks (a FIFO or a device
+ * given as an input is refused, "not a regular file", not waited on).
+ * NULL and SASNAV_ERR_IO with a message naming the path on failure. */
+FILE *sasnav_fopen_regular(const char *path);
+/* The same as a descriptor (-1 on failure). */
+int sasnav_open_regular(const char *path);
+
 /* Creates the temporary file (mode 0644). SASNAV_ERR_IO / SASNAV_ERR_ARG
  * with a message on failure (nothing left behind). */
 int sasnav_text_open(sasnav_text_out *out, const char *path);
