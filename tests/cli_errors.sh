@@ -98,6 +98,11 @@ head -c $((size / 2)) "$T/run.h5" >"$T/trunc.h5"
 expect_fail "truncated run" "$T/i3.h5" "$SASNAV" image "$T/trunc.h5" -o "$T/i3.h5"
 expect_fail "image file as run" "$T/i4.h5" "$SASNAV" image "$T/img.h5" -o "$T/i4.h5"
 expect_fail "bad grid" "$T/i5.h5" "$SASNAV" image "$T/run.h5" --grid 1,0,10,9,10,10 -o "$T/i5.h5"
+# the grid's own reason reaches the user (not a generic syntax message)
+grep -q "must be increasing" "$T/stderr" || { echo "FAIL bad grid message: $(cat "$T/stderr")"; fails=$((fails + 1)); }
+"$SASNAV" image "$T/run.h5" --grid -1,1,100000,9,11,100000 -o "$T/i5.h5" >/dev/null 2>"$T/stderr"
+[ $? -eq 2 ] && grep -q "too large" "$T/stderr" ||
+    { echo "FAIL huge grid: status or message: $(cat "$T/stderr")"; fails=$((fails + 1)); }
 # a FIFO given as a config or run is refused at once, not waited on
 mkfifo "$T/fifo.yaml" && {
     timeout 30 "$SASNAV" simulate --config "$T/fifo.yaml" -o "$T/f.h5" >/dev/null 2>"$T/stderr"
@@ -109,11 +114,6 @@ mkfifo "$T/fifo.yaml" && {
     [ $st -eq 1 ] && grep -q "not a regular file" "$T/stderr" ||
         { echo "FAIL FIFO run: exit $st, $(cat "$T/stderr")"; fails=$((fails + 1)); }
 }
-# the grid's own reason reaches the user (not a generic syntax message)
-grep -q "must be increasing" "$T/stderr" || { echo "FAIL bad grid message: $(cat "$T/stderr")"; fails=$((fails + 1)); }
-"$SASNAV" image "$T/run.h5" --grid -1,1,100000,9,11,100000 -o "$T/i5.h5" >/dev/null 2>"$T/stderr"
-[ $? -eq 2 ] && grep -q "too large" "$T/stderr" ||
-    { echo "FAIL huge grid: status or message: $(cat "$T/stderr")"; fails=$((fails + 1)); }
 expect_fail "output in missing dir" "$T/nodir/i6.h5" "$SASNAV" image "$T/run.h5" -o "$T/nodir/i6.h5"
 
 # The pair estimator and the cuts on the paper's pair (coarse iterations to
