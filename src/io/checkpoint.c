@@ -73,6 +73,13 @@ static int read_all(int fd, const char *path, unsigned char **buf, size_t *len)
     if (fstat(fd, &st) || !S_ISREG(st.st_mode))
         return sasnav_set_error(SASNAV_ERR_IO, "checkpoint %s: not a regular file", path);
     size_t n = (size_t)st.st_size;
+    /* The magic before the whole file: any file named by mistake (a run
+     * of tens of GB) is refused without reading it into memory (found by
+     * review). An empty or short file goes on to parse's message. */
+    char magic[8];
+    if (n >= 8 && (pread(fd, magic, 8, 0) != 8 || memcmp(magic, MAGIC, 8)))
+        return sasnav_set_error(SASNAV_ERR_FORMAT, "%s is not a sasnav checkpoint (give another "
+                                "--checkpoint file, or remove it)", path);
     unsigned char *b = malloc(n + 1);
     if (!b) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory reading checkpoint %s", path);
     size_t got = 0;
