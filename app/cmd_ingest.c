@@ -107,9 +107,12 @@ int cmd_ingest(int argc, char **argv)
     sasnav_airsas_default_opts(&o);
     long v;
     double d;
-    int opt;
+    int opt, n_airsas = 0;
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
+        /* options of the AirSAS ingest alone (refused with --wav, which
+         * would ignore them) */
+        if (strchr("abmFsnMTfBRrc", opt)) n_airsas++;
         switch (opt) {
         case 'a': dir = optarg; break;
         case 'b': bgdir = optarg; break;
@@ -189,6 +192,9 @@ int cmd_ingest(int argc, char **argv)
         return cli_usage("ingest", "unexpected argument '%s' (inputs are given with --airsas)",
                         argv[optind]);
     if (wavdir) {
+        if (n_airsas)
+            return cli_usage("ingest", "--wav takes only --range, --decimation, --threads and -o (the "
+                                       "other options are the AirSAS ingest's)");
         if (!output) return cli_usage("ingest", "an output file is required (-o run.h5)");
         return cmd_ingest_wav(wavdir, decimation_given ? o.decimation : 0, range, output);
     }

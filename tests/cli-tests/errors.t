@@ -54,7 +54,7 @@ Ping indices outside the run:
 Recording directories without recordings:
 
   $ sasnav ingest --wav emptydir -o x.h5 2>&1
-  sasnav ingest: cannot ingest the WAV recording emptydir: cannot open emptydir/positions.csv: No such file or directory
+  sasnav ingest: cannot ingest the WAV recording emptydir: emptydir/positions.csv: cannot open: No such file or directory
   [1]
   $ sasnav ingest --airsas emptydir -o x.h5 2>&1
   sasnav ingest: cannot read the AirSAS recording emptydir: emptydir/Coordinates.csv: cannot open: No such file or directory
