@@ -24,7 +24,7 @@ void fuse_aiding_error(const sasnav_run *run, int p, int q, sasnav_pose nom, dou
     if (!ad || q != p + 1) return;
     double dt = ad->time[q] - ad->time[p];
     double dpsi = nom.theta + est_yaw;
-    if (ad->yaw_rate) {
+    if (ad->yaw_rate && isfinite(ad->yaw_rate_sigma[q])) { /* (+inf: no measurement there) */
         dpsi = ad->yaw_rate[q] * dt;
         a->theta = dpsi - nom.theta;
         sa->theta = ad->yaw_rate_sigma[q] * dt;
