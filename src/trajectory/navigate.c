@@ -1368,6 +1368,14 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
  * (opts.compact_pairs; ctx->pairs is then emptied). */
 static int hand_out_pairs(nav_ctx *ctx, sasnav_navigation *out)
 {
+    /* failed pairs counted as they end (a second pass may rescue a pair or
+     * fail one: the first pass's count went stale; found by review) */
+    out->n_failed = 0;
+    for (int j = 0; j < out->n_pairs; j++) {
+        sasnav_navigate_pair np;
+        get_pair(ctx, j, &np);
+        out->n_failed += np.status != SASNAV_OK && np.status != SASNAV_ERR_NOT_CONVERGED;
+    }
     if (ctx->opts->compact_pairs) {
         pair_store *s = malloc(sizeof *s);
         if (!s) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
