@@ -721,6 +721,28 @@ static void test_channel_sizes(void)
     sasnav_run_free(run);
 }
 
+/* Replaces /raw of the run file at `path` by a chunked one (a chunk per
+ * ping) of n_pings x 3 x 16 samples, deflated when `deflate`, of which
+ * only ping 0 (`ping0`, 3 x 16 complex) is written. */
+static void raw_first_ping_only(const char *path, hid_t c32, hsize_t n_pings, int deflate, const float *ping0)
+{
+    hid_t f = open_rw(path);
+    H5Ldelete(f, "/raw", H5P_DEFAULT);
+    hsize_t dims[3] = {n_pings, 3, 16}, chunk[3] = {1, 3, 16}, start[3] = {0, 0, 0};
+    hid_t space = H5Screate_simple(3, dims, NULL), dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(dcpl, 3, chunk);
+    if (deflate) H5Pset_deflate(dcpl, 6);
+    hid_t dset = H5Dcreate2(f, "/raw", c32, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+    hid_t mspace = H5Screate_simple(3, chunk, NULL);
+    H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, chunk, NULL);
+    CHECK(H5Dwrite(dset, c32, mspace, space, H5P_DEFAULT, ping0) >= 0, "cannot write one ping");
+    H5Sclose(mspace);
+    H5Dclose(dset);
+    H5Pclose(dcpl);
+    H5Sclose(space);
+    H5Fclose(f);
+}
+
 static void test_bad_run_files(void)
 {
     sasnav_run *run = NULL;
@@ -820,45 +842,18 @@ static void test_bad_run_files(void)
     /* /raw claiming a million pings with one ping stored: rejected before
      * anything is allocated for it */
     path = fresh_run_file("sparse.h5", 0);
-    f = open_rw(path);
-    H5Ldelete(f, "/raw", H5P_DEFAULT);
-    hsize_t big[3] = {1000000, 3, 16}, chunk[3] = {1, 3, 16}, start[3] = {0, 0, 0};
-    hid_t space = H5Screate_simple(3, big, NULL), dcpl = H5Pcreate(H5P_DATASET_CREATE);
-    H5Pset_chunk(dcpl, 3, chunk);
-    hid_t dset = H5Dcreate2(f, "/raw", c32, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
-    hid_t mspace = H5Screate_simple(3, chunk, NULL);
-    H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, chunk, NULL);
-    CHECK(H5Dwrite(dset, c32, mspace, space, H5P_DEFAULT, zeros) >= 0, "cannot write one ping");
-    H5Sclose(mspace);
-    H5Dclose(dset);
-    H5Pclose(dcpl);
-    H5Sclose(space);
-    H5Fclose(f);
+    raw_first_ping_only(path, c32, 1000000, 0, zeros);
     CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
     CHECK(strstr(sasnav_last_error(), "incomplete") != NULL, "message should say the data is incomplete");
     /* /raw compressed, chunk by ping, only ping 0 written (a writer that
      * died): the storage is within the compression's bounds, but chunks
      * are missing; their samples would read as zeros */
     path = fresh_run_file("partial-gzip.h5", 0);
-    f = open_rw(path);
-    H5Ldelete(f, "/raw", H5P_DEFAULT);
     {
-        hsize_t dims[3] = {4, 3, 16}, ck[3] = {1, 3, 16}, at[3] = {0, 0, 0};
-        hid_t sp = H5Screate_simple(3, dims, NULL), pl = H5Pcreate(H5P_DATASET_CREATE);
-        H5Pset_chunk(pl, 3, ck);
-        H5Pset_deflate(pl, 6);
-        hid_t ds = H5Dcreate2(f, "/raw", c32, sp, H5P_DEFAULT, pl, H5P_DEFAULT);
-        hid_t ms = H5Screate_simple(3, ck, NULL);
-        H5Sselect_hyperslab(sp, H5S_SELECT_SET, at, NULL, ck, NULL);
         float one[2 * 3 * 16];
         for (int k = 0; k < 2 * 3 * 16; k++) one[k] = 0.25f * (float)(k % 7) - 0.5f;
-        CHECK(H5Dwrite(ds, c32, ms, sp, H5P_DEFAULT, one) >= 0, "cannot write ping 0");
-        H5Sclose(ms);
-        H5Dclose(ds);
-        H5Pclose(pl);
-        H5Sclose(sp);
+        raw_first_ping_only(path, c32, 4, 1, one);
     }
-    H5Fclose(f);
     CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);
     CHECK(strstr(sasnav_last_error(), "chunks written") != NULL, "partial compressed /raw: '%s'",
           sasnav_last_error());
