@@ -77,7 +77,11 @@ static int read_all(int fd, const char *path, unsigned char **buf, size_t *len)
      * of tens of GB) is refused without reading it into memory (found by
      * review). An empty or short file goes on to parse's message. */
     char magic[8];
-    if (n >= 8 && (pread(fd, magic, 8, 0) != 8 || memcmp(magic, MAGIC, 8)))
+    ssize_t got8 = n >= 8 ? pread(fd, magic, 8, 0) : 0;
+    if (n >= 8 && got8 != 8)
+        return sasnav_set_error(SASNAV_ERR_IO, "cannot read checkpoint %s: %s", path,
+                                got8 < 0 ? strerror(errno) : "shorter than its size");
+    if (n >= 8 && memcmp(magic, MAGIC, 8))
         return sasnav_set_error(SASNAV_ERR_FORMAT, "%s is not a sasnav checkpoint (give another "
                                 "--checkpoint file, or remove it)", path);
     unsigned char *b = malloc(n + 1);

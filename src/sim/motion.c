@@ -195,7 +195,7 @@ int sasnav_simulate_aiding(const sasnav_aiding_params *ap, double speed, sasnav_
             double sig_n = ap->gyro_arw / sqrt(dt);
             a->yaw_rate[p] = rate + bg + sig_n * ng;
             double sig = sqrt(sig_n * sig_n + ap->gyro_bias * ap->gyro_bias);
-            a->yaw_rate_sigma[p] = sig > 0 ? sig : 1e-12;
+            a->yaw_rate_sigma[p] = fmax(sig, 1e-12); /* the readers' smallest sigma */
         }
         if (ap->dvl) {
             double nv[2] = {nv0, nv1};
@@ -203,7 +203,7 @@ int sasnav_simulate_aiding(const sasnav_aiding_params *ap, double speed, sasnav_
                 a->velocity[2 * p + k] = (1.0 + sv) * v[k] + bv[k] + ap->dvl_noise * nv[k];
                 double sc = ap->dvl_scale * v[k];
                 double sig = sqrt(ap->dvl_noise * ap->dvl_noise + ap->dvl_bias * ap->dvl_bias + sc * sc);
-                a->velocity_sigma[2 * p + k] = sig > 0 ? sig : 1e-12;
+                a->velocity_sigma[2 * p + k] = fmax(sig, 1e-12);
             }
         }
     }

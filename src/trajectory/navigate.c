@@ -1012,7 +1012,9 @@ static void speed_lags(const nav_ctx *ctx, int from_dvl, double *lags)
                 if (j < 0 || j >= n - 1) continue;
                 sasnav_navigate_pair np;
                 get_pair(ctx, j, &np);
-                if (np.first_verdict != SASNAV_VERDICT_OK || !(fabs(np.nominal.x) > 0)) continue;
+                /* (usable too: a record of an older version gave a failed
+                 * pair the verdict 0, "ok") */
+                if (np.first_verdict != SASNAV_VERDICT_OK || !usable(&np) || !(fabs(np.nominal.x) > 0)) continue;
                 sum += np.result.error.x / fabs(np.nominal.x);
                 w += 1;
             }
