@@ -491,9 +491,7 @@ static double layout_pc_spacing(const sasnav_array *array, const sasnav_ping_pos
 {
     double lo = INFINITY, hi = -INFINITY;
     for (int l = 0; l < array->n_rx; l++) {
-        double xr, yr;
-        sasnav_pose_apply(ch[l].array, array->rx_u[l], 0.0, &xr, &yr);
-        double xc = 0.5 * (xr + ch[l].tx.x);
+        double xc = pair_phase_centre_x(array, &ch[l], l);
         lo = xc < lo ? xc : lo;
         hi = xc > hi ? xc : hi;
     }

@@ -154,4 +154,13 @@ int pair_batch(sasnav_pair *pr, int n, int (*fn)(sasnav_pair *w, int j, void *ct
  * evaluates next costs the same whatever the number of workers. */
 void pair_forget(sasnav_pair *pr, int level);
 
+/* Along-track position of channel l's phase centre (the midpoint of its
+ * transmitter and receiver) in the frame of the ping geometry g. */
+static inline double pair_phase_centre_x(const sasnav_array *array, const sasnav_ping_pose *g, int l)
+{
+    double xr, yr;
+    sasnav_pose_apply(g->array, array->rx_u[l], 0.0, &xr, &yr);
+    return 0.5 * (xr + g->tx.x);
+}
+
 #endif

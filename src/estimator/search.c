@@ -1110,12 +1110,7 @@ static void phase_centres(const sasnav_pair *pr, int q, double *x)
 {
     const sasnav_ping_pose *ch = pr->per_channel ? (q ? pr->chan_q : pr->chan_p) : NULL;
     const sasnav_ping_pose *one = q ? &pr->local_q : &pr->local_p;
-    for (int l = 0; l < pr->array.n_rx; l++) {
-        const sasnav_ping_pose *g = ch ? &ch[l] : one;
-        double xr, yr;
-        sasnav_pose_apply(g->array, pr->array.rx_u[l], 0.0, &xr, &yr);
-        x[l] = 0.5 * (xr + g->tx.x);
-    }
+    for (int l = 0; l < pr->array.n_rx; l++) x[l] = pair_phase_centre_x(&pr->array, ch ? &ch[l] : one, l);
 }
 
 /* 1 when, moved by the estimate's along-track displacement, a phase centre

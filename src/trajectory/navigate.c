@@ -639,6 +639,14 @@ static int usable(const sasnav_navigate_pair *np)
     return np->status == SASNAV_OK || np->status == SASNAV_ERR_NOT_CONVERGED;
 }
 
+/* Half a slip: half a phase-centre spacing of surge, its yaw at the
+ * range of interest (x and theta; y unused). */
+static sasnav_pose half_slip(const nav_ctx *ctx)
+{
+    double d = ctx->pc_spacing, r = ctx->run->range_of_interest > 0 ? ctx->run->range_of_interest : 1.0;
+    return (sasnav_pose){0.5 * d, 0.0, 0.5 * d / r};
+}
+
 /* Whether an estimate u agrees with the aiding v (standard deviations sa)
  * in surge and yaw, the directions of a phase-centre slip: within half a
  * slip (d / 2 of surge, d / (2 R) of yaw, d the phase-centre spacing, R
@@ -649,9 +657,9 @@ static int usable(const sasnav_navigate_pair *np)
 static int agrees(const nav_ctx *ctx, sasnav_pose u, sasnav_pose v, sasnav_pose sa)
 {
     double gate = ctx->opts->aiding_gate;
-    double d = ctx->pc_spacing, r = ctx->run->range_of_interest > 0 ? ctx->run->range_of_interest : 1.0;
-    if (isfinite(sa.x) && fabs(u.x - v.x) > 0.5 * d + gate * sa.x) return 0;
-    if (isfinite(sa.theta) && fabs(u.theta - v.theta) > 0.5 * d / r + gate * sa.theta) return 0;
+    sasnav_pose h = half_slip(ctx);
+    if (isfinite(sa.x) && fabs(u.x - v.x) > h.x + gate * sa.x) return 0;
+    if (isfinite(sa.theta) && fabs(u.theta - v.theta) > h.theta + gate * sa.theta) return 0;
     return 1;
 }
 
@@ -662,8 +670,8 @@ static int agrees(const nav_ctx *ctx, sasnav_pose u, sasnav_pose v, sasnav_pose 
 static int aiding_settles(const nav_ctx *ctx, sasnav_pose sa)
 {
     double gate = ctx->opts->aiding_gate;
-    double d = ctx->pc_spacing, r = ctx->run->range_of_interest > 0 ? ctx->run->range_of_interest : 1.0;
-    return isfinite(sa.x) && isfinite(sa.theta) && gate * sa.x < 0.5 * d && gate * sa.theta < 0.5 * d / r;
+    sasnav_pose h = half_slip(ctx);
+    return isfinite(sa.x) && isfinite(sa.theta) && gate * sa.x < h.x && gate * sa.theta < h.theta;
 }
 
 /* Makes a new estimate r of the pair its result: the new values, the
