@@ -69,7 +69,7 @@ static const char *help =
     "  --eta-max E       final eta above which a pair's verdict is 'failed'\n"
     "                    (default 0.6; see 'sasnav pair --help')\n"
     "  --coincidence F   compact scenes: a pair within F phase-centre spacings\n"
-    "                    of a coincidence is 'ambiguous' (default 0.04, 0 off;\n"
+    "                    of a coincidence is 'ambiguous' (default 0.10, 0 off;\n"
     "                    with --virtual-array off unless given; see 'sasnav\n"
     "                    pair --help')\n"
     "  --final C         each pair's final-stage criterion: auto (default), eta\n"

@@ -265,14 +265,14 @@ static void check_verdict(void)
         CHECK(r.chosen >= 0 && r.chosen < r.n_candidates && r.margin >= 1.0 && r.margin < 1.15,
               "chosen %d, margin %.3f", r.chosen, r.margin);
         /* The coincidence rule (opts.verdict_coincidence), recomputed here
-         * from its definition: the along-track displacement within 0.04
-         * phase-centre spacings (d = 2.5 cm, half the receiver pitch) of
+         * from its definition: the along-track displacement within
+         * opts.verdict_coincidence phase-centre spacings (d = 2.5 cm, half the receiver pitch) of
          * a multiple of it shorter than the array (phase centres of q on
          * p's), on a compact scene (contrast above 5). */
         double d = 0.5 * (run->array.rx_u[1] - run->array.rx_u[0]);
         double u = r.displacement.x / d;
         int expect = pair_contrast(pair) > po.joint_contrast_max && fabs(nearbyint(u)) < run->array.n_rx &&
-                     fabs(u - nearbyint(u)) < 0.04;
+                     fabs(u - nearbyint(u)) < po.verdict_coincidence;
         printf("point target: contrast %.2f, displacement %.3f spacings, coincidence %d\n",
                pair_contrast(pair), u, r.coincidence);
         CHECK(pair_contrast(pair) > po.joint_contrast_max, "point target's contrast %.2f", pair_contrast(pair));
@@ -282,10 +282,15 @@ static void check_verdict(void)
     /* The rule alone decides a local estimate (estimate_from: one
      * candidate, no margin): with a tolerance of half a spacing every
      * estimate on the compact scene is at a coincidence and "ambiguous",
-     * with 0 none is and the same estimate is "ok". */
-    for (int t = 0; t < 2; t++) {
+     * with 0 none is and the same estimate is "ok". Then the compact
+     * scene's margin (opts.verdict_margin_compact): the same estimate
+     * finished from a first result whose margin is set to 1.2 (between
+     * verdict_margin_min, 1.15, and the compact default, 1.25) is
+     * "ambiguous" with the default and "ok" with the compact margin at 1. */
+    for (int t = 0; t < 4; t++) {
         sasnav_pair_opts pc = po;
         pc.verdict_coincidence = t == 0 ? 0.5 : 0.0;
+        if (t == 3) pc.verdict_margin_compact = 1.0;
         pair = NULL;
         CHECK_OK(sasnav_pair_create(&run->sys, &run->array, &run->win, &pc, &pair));
         if (!pair) continue;
@@ -300,6 +305,18 @@ static void check_verdict(void)
         CHECK(r.coincidence == (t == 0), "tolerance %.1f: coincidence %d", pc.verdict_coincidence, r.coincidence);
         CHECK(r.verdict == (t == 0 ? SASNAV_VERDICT_AMBIGUOUS : SASNAV_VERDICT_OK),
               "tolerance %.1f: verdict %s", pc.verdict_coincidence, sasnav_verdict_name(r.verdict));
+        if (t >= 2) {
+            CHECK(po.verdict_margin_min < 1.2 && 1.2 < po.verdict_margin_compact, "default margins %.2f, %.2f",
+                  po.verdict_margin_min, po.verdict_margin_compact);
+            sasnav_pair_result first = r, fin;
+            first.margin = 1.2;
+            CHECK_OK(sasnav_pair_finish(pair, &first, &fin));
+            printf("point target, margin 1.2, compact margin %.2f: verdict %s\n", pc.verdict_margin_compact,
+                   sasnav_verdict_name(fin.verdict));
+            CHECK(!fin.coincidence && fin.verdict == (t == 2 ? SASNAV_VERDICT_AMBIGUOUS : SASNAV_VERDICT_OK),
+                  "compact margin %.2f, margin 1.2: verdict %s", pc.verdict_margin_compact,
+                  sasnav_verdict_name(fin.verdict));
+        }
         sasnav_pair_destroy(pair);
     }
     /* The same pair given channel by channel (set_data_channels, each
@@ -367,9 +384,12 @@ static void check_verdict(void)
         }
         sasnav_pair_destroy(pair);
         /* A speckle seabed is not compact: even a tolerance of half a
-         * spacing flags nothing there (the contrast gate). */
+         * spacing flags nothing there (the contrast gate), nor does a
+         * compact scene's margin of 100 (finished from a first result
+         * whose margin is set to 1.2, above verdict_margin_min). */
         sasnav_pair_opts pc = po;
         pc.verdict_coincidence = 0.5;
+        pc.verdict_margin_compact = 100.0;
         pair = make_pair_opts(a, &pc);
         if (pair) {
             CHECK_OK(sasnav_pair_estimate_from(pair, (sasnav_pose){0.005, 0.002, 0.004}, &r));
@@ -378,6 +398,11 @@ static void check_verdict(void)
             CHECK(pair_contrast(pair) <= pc.joint_contrast_max && !r.coincidence && r.verdict == SASNAV_VERDICT_OK,
                   "speckle pair: contrast %.2f, coincidence %d, verdict %s", pair_contrast(pair), r.coincidence,
                   sasnav_verdict_name(r.verdict));
+            sasnav_pair_result first = r, fin;
+            first.margin = 1.2;
+            CHECK_OK(sasnav_pair_finish(pair, &first, &fin));
+            CHECK(fin.verdict == SASNAV_VERDICT_OK, "speckle pair, margin 1.2, compact margin 100: verdict %s",
+                  sasnav_verdict_name(fin.verdict));
         }
         sasnav_pair_destroy(pair);
     }

@@ -155,7 +155,14 @@ typedef struct {
                                  to the coincidence from up to 0.4 spacing
                                  away (docs/estimator.md, "Known weakness:
                                  attraction to phase-centre coincidence");
-                                 default 0.04, 0 never */
+                                 default 0.10, 0 never */
+    double verdict_margin_compact;/* on compact scenes, the margin below
+                                 which the estimate is "ambiguous" (the
+                                 larger of this and verdict_margin_min;
+                                 default 1.25: the attraction's partial
+                                 slips, 7-10 mm on the tank, came with
+                                 margins of 1.16-1.64; docs/validation.md,
+                                 "Flagged pairs") */
     int nthreads;          /* OpenMP threads (0 = default; see "Threads" above) */
     sasnav_op_opts op;     /* operator options (default: sasnav_op's, with
                               tolerance 1e-3: docs/estimator.md) */

@@ -38,7 +38,8 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->blur = 0.075;
     o->verdict_eta_max = 0.6;
     o->verdict_margin_min = 1.15;
-    o->verdict_coincidence = 0.04;
+    o->verdict_coincidence = 0.10;
+    o->verdict_margin_compact = 1.25;
     o->blur_cross = 0.0;
     o->error_extent = 0.0;
     o->error_taper = 0.0;
@@ -287,6 +288,8 @@ int sasnav_pair_opts_check(const sasnav_pair_opts *o)
         OPT_FAIL("verdict_margin_min %g must be finite and >= 1", o->verdict_margin_min);
     if (!(o->verdict_coincidence >= 0 && o->verdict_coincidence <= 0.5))
         OPT_FAIL("verdict_coincidence %g must be in [0, 0.5]", o->verdict_coincidence);
+    if (!(o->verdict_margin_compact >= 1) || !isfinite(o->verdict_margin_compact))
+        OPT_FAIL("verdict_margin_compact %g must be finite and >= 1", o->verdict_margin_compact);
     if (o->gpu != 0 && o->gpu != 1) OPT_FAIL("gpu = %d must be 0 or 1", o->gpu);
     if (o->final_criterion != SASNAV_FINAL_ETA && o->final_criterion != SASNAV_FINAL_JOINT &&
         o->final_criterion != SASNAV_FINAL_AUTO)

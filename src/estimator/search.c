@@ -1143,6 +1143,17 @@ static int at_coincidence(const sasnav_pair *pr, const sasnav_pair_result *res, 
     return 0;
 }
 
+/* The margin an "ok" estimate needs: verdict_margin_min, and on a compact
+ * scene (the contrast that also gates the coincidence rule) at least
+ * verdict_margin_compact (docs/validation.md, "Flagged pairs"). */
+static double margin_min(const sasnav_pair *pr)
+{
+    const sasnav_pair_opts *o = sasnav_pair_options(pr);
+    double m = o->verdict_margin_min;
+    if (pair_contrast(pr) > o->joint_contrast_max && o->verdict_margin_compact > m) m = o->verdict_margin_compact;
+    return m;
+}
+
 /* The verdict on a finished estimate (docs/estimator.md, "Verdict"). */
 static void judge(const sasnav_pair *pr, sasnav_pair_result *res, int converged, double pc_spacing)
 {
@@ -1150,7 +1161,8 @@ static void judge(const sasnav_pair *pr, sasnav_pair_result *res, int converged,
     res->coincidence = at_coincidence(pr, res, pc_spacing);
     if (!(res->overlap >= o->min_overlap)) res->verdict = SASNAV_VERDICT_NO_OVERLAP;
     else if (!converged || !(res->eta <= o->verdict_eta_max)) res->verdict = SASNAV_VERDICT_FAILED;
-    else if (!(res->margin >= o->verdict_margin_min) || res->coincidence) res->verdict = SASNAV_VERDICT_AMBIGUOUS;
+    else if (!(res->margin >= margin_min(pr)) || res->coincidence)
+        res->verdict = SASNAV_VERDICT_AMBIGUOUS;
     else res->verdict = SASNAV_VERDICT_OK;
 }
 

@@ -229,7 +229,7 @@ static uint64_t options_digest(const sasnav_run *run, const sasnav_navigate_opts
                                po->surge_sigma, po->grid_step.x, po->grid_step.y, po->grid_step.theta,
                                po->error_extent, po->error_taper, po->min_overlap,
                                po->verdict_eta_max, po->verdict_margin_min, po->op.tolerance,
-                               po->op.oversampling, po->verdict_coincidence, 0, 0, 0, 0, 0};
+                               po->op.oversampling, po->verdict_coincidence, po->verdict_margin_compact, 0, 0, 0, 0};
         h = sasnav_hash_doubles(h, pd, 31);
         /* the final stage's criterion and the joint misfit's settings (and
          * the contrast that also gates the coincidence rule); keys of
@@ -736,8 +736,13 @@ static int leanable(const sasnav_navigate_pair *np)
  * pair's, its surge is drawn towards the coincidence. */
 static int coincidence_only(const nav_ctx *ctx, int verdict, const sasnav_navigate_pair *np)
 {
-    return verdict == SASNAV_VERDICT_AMBIGUOUS && np->result.coincidence &&
-           np->result.margin >= ctx->opts->pair.verdict_margin_min && np->resolution == SASNAV_RESOLVED_NONE;
+    /* (a coincidence is flagged on compact scenes only, whose margin
+     * minimum is verdict_margin_compact where that is larger) */
+    const sasnav_pair_opts *po = &ctx->opts->pair;
+    double need = po->verdict_margin_compact > po->verdict_margin_min ? po->verdict_margin_compact
+                                                                     : po->verdict_margin_min;
+    return verdict == SASNAV_VERDICT_AMBIGUOUS && np->result.coincidence && np->result.margin >= need &&
+           np->resolution == SASNAV_RESOLVED_NONE;
 }
 
 /* Standard deviations of a pair's estimate in the smoother. */

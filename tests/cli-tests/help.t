@@ -149,8 +149,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       "A survey-class system")
     --coincidence F   on compact scenes, an estimate within F phase-centre
                       spacings of a phase-centre coincidence is 'ambiguous'
-                      (its surge is not resolved there; default 0.04, 0 off:
-                      docs/estimator.md, "Verdict")
+                      (its surge is not resolved there; default 0.10, 0 off;
+                      compact scenes also need an eta margin of 1.25 for
+                      'ok': docs/estimator.md, "Verdict")
     --threads N       OpenMP threads
     --gpu             the error evaluations on a CUDA GPU (builds configured
                       with -DSASNAV_CUDA=ON; the same estimates to float
@@ -291,7 +292,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --eta-max E       final eta above which a pair's verdict is 'failed'
                       (default 0.6; see 'sasnav pair --help')
     --coincidence F   compact scenes: a pair within F phase-centre spacings
-                      of a coincidence is 'ambiguous' (default 0.04, 0 off;
+                      of a coincidence is 'ambiguous' (default 0.10, 0 off;
                       with --virtual-array off unless given; see 'sasnav
                       pair --help')
     --final C         each pair's final-stage criterion: auto (default), eta

@@ -281,6 +281,7 @@ class PairOpts(Structure):  # estimator.h
         ("verdict_eta_max", c_double),
         ("verdict_margin_min", c_double),
         ("verdict_coincidence", c_double),
+        ("verdict_margin_compact", c_double),
         ("nthreads", c_int),
         ("op", OpOpts),
         ("gpu", c_int),
