@@ -179,6 +179,13 @@ static long cgls_cost(int k) { return 2L * k; }
 /* p's reconstruction on the level's grid, with the level's iterations. */
 static int level_rho_p(sasnav_pair *pr, pair_level *lv)
 {
+    const pair_level *src = pr->twin_of ? &pr->twin_of->level[lv - pr->level] : NULL;
+    if (src && src->np == lv->np && src->k == lv->k) {
+        memcpy(lv->rho_p, src->rho_p, sizeof(sasnav_cfloat) * lv->np);
+        lv->rho_p_norm = src->rho_p_norm;
+        lv->contrast = src->contrast;
+        return SASNAV_OK;
+    }
     sasnav_cgls_opts co = {lv->k, pr->opts.tikhonov};
     int rc = sasnav_cgls(lv->op_p, pr->data_p, &co, lv->rho_p, lv->cgls_work);
     pr->applications += cgls_cost(lv->k);
@@ -1138,6 +1145,7 @@ static sasnav_pair *make_twin(sasnav_pair *pr)
     o.nthreads = 1;
     sasnav_pair *tw = NULL;
     int rc = sasnav_pair_create(&pr->sys, &pr->array, &pr->win, &o, &tw);
+    if (!rc) tw->twin_of = pr; /* p's reconstructions copied (level_rho_p) */
     if (!rc && pr->per_channel) {
         rc = sasnav_pair_set_data_channels(tw, pr->data_p, pr->data_q, pr->nominal, pr->chan_p,
                                            pr->chan_q);
@@ -1149,6 +1157,7 @@ static sasnav_pair *make_twin(sasnav_pair *pr)
             rc = make_levels(tw);
         }
     }
+    if (tw) tw->twin_of = NULL;
     if (!rc) tw->pc_spacing = pr->pc_spacing;
     if (rc) {
         sasnav_pair_destroy(tw);

@@ -88,6 +88,10 @@ struct sasnav_pair {
      * (no more are tried for this data). */
     struct sasnav_pair *twin[PAIR_MAX_WORKERS - 1];
     int n_twins, twin_failed;
+    /* While a twin is made: the estimator it twins, whose p
+     * reconstructions it copies instead of computing them again (the same
+     * bits: the operators' sums do not depend on their thread count). */
+    const struct sasnav_pair *twin_of;
     /* The joint misfit's scene and CGLS work (pair_eval_joint). */
     sasnav_cfloat *joint_x, *joint_work;
 };
