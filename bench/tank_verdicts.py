@@ -4,7 +4,7 @@ scenes) against the truth: how many slipped pairs come back "ok"
 (docs/validation.md, "Flagged pairs"; docs/estimator.md, "Verdict").
 
 usage: python3 bench/tank_verdicts.py SASNAV --seeds S0 N [--dir DIR] [--threads T]
-       python3 bench/tank_verdicts.py --tables DIR/t*/val/pairs.csv
+       python3 bench/tank_verdicts.py --tables DIR/t*/val/pairs.csv [--tolerance T]
 
 For each seed: `sasnav tank -o REC --seed S`, `sasnav ingest --wav REC -o
 tank.h5`, `sasnav validate tank.h5 --fix-yaw --surge-sigma 0.025 -o val`
@@ -14,7 +14,10 @@ than a quarter phase-centre spacing, 6.25 mm) passed as "ok", and the
 surge errors of the "ok" pairs and of the pairs at a phase-centre
 coincidence; the same for the verdict without the coincidence rule (the
 margin alone: what the verdict was before it), recomputed from the
-`margin` column. Python's standard library only.
+`margin` column; then the verdicts recomputed for other coincidence
+tolerances and compact-scene margins (`--grid`; docs/validation.md, "A
+wider tolerance and a compact scene's margin"). Python's standard library
+only.
 """
 import argparse
 import csv
@@ -25,6 +28,10 @@ import sys
 
 SLIP = 0.025 / 4  # m: a quarter of the tank's phase-centre spacing
 MARGIN_MIN = 1.15  # opts.verdict_margin_min
+SPACING = 0.025  # m: the tank's phase-centre spacing
+TOLERANCE = 0.10  # opts.verdict_coincidence's default (the self-check's; --tolerance)
+GRID_TOL = (0.04, 0.05, 0.06, 0.08, 0.10)
+GRID_MARGIN = (1.15, 1.20, 1.25, 1.30, 1.40, 1.50)
 
 
 def run_seed(sasnav, seed, top, threads):
@@ -60,7 +67,7 @@ def summary(label, rows):
             f"p95 {quantile(err, 0.95):.2f} / max {max(err) if err else float('nan'):.2f} mm")
 
 
-def table(paths):
+def table(paths, tolerance=TOLERANCE):
     rows = []
     for p in paths:
         with open(p) as f:
@@ -79,7 +86,7 @@ def table(paths):
     print("| verdicts | \"ok\" pairs | slipped pairs passed as \"ok\" | \"ok\" pairs |")
     print("|---|---|---|---|")
     for label, ok in (("margin alone (before the coincidence rule)", ok_before),
-                      ("margin and coincidence", ok_now)):
+                      ("the build's verdicts", ok_now)):
         ok_ids = {id(r) for r in ok}  # rows by identity: two pairs may print alike
         bad = sum(1 for r in slipped if id(r) in ok_ids)
         print(f"| {label} | {len(ok)} of {len(rows)} | {bad} of {len(slipped)} | {summary(label, ok)} |")
@@ -89,6 +96,32 @@ def table(paths):
         if r["verdict"] == "ok":
             print(f"  passed as ok: K = {r['k']} ({r['p']}, {r['q']}), surge error "
                   f"{1e3 * float(r['error_surge']):+.2f} mm, estimate {1e3 * float(r['surge']):+.3f} mm")
+    grid(rows, slipped, tolerance)
+
+
+def grid(rows, slipped, tolerance):
+    """The verdicts recomputed for other coincidence tolerances (rows) and
+    compact-scene margins (columns): "ok" pairs / slipped among them. The
+    tank's pairs are a whole number of plotter steps of one spacing apart,
+    so a pair is at a coincidence where its surge (the estimate's departure
+    from the nominal step) lies within the tolerance of a multiple of the
+    spacing; checked against the `coincidence` column at the tolerance the
+    tables were made with."""
+    def dist(r):
+        u = float(r["surge"]) / SPACING
+        return abs(u - round(u))
+    miss = sum(1 for r in rows if (dist(r) < tolerance) != (r["coincidence"] == "1"))
+    print(f"verdicts recomputed (\"ok\" / slipped among them; {miss} of {len(rows)} pairs disagree "
+          f"with the coincidence column at tolerance {tolerance}):")
+    print("| tolerance \\ margin | " + " | ".join(f"{m:.2f}" for m in GRID_MARGIN) + " |")
+    print("|---" * (len(GRID_MARGIN) + 1) + "|")
+    slip_ids = {id(r) for r in slipped}
+    for tol in GRID_TOL:
+        cells = []
+        for m in GRID_MARGIN:
+            ok = [r for r in rows if r["status"] == "ok" and float(r["margin"]) >= m and dist(r) >= tol]
+            cells.append(f"{len(ok)} / {sum(1 for r in ok if id(r) in slip_ids)}")
+        print(f"| {tol:.2f} | " + " | ".join(cells) + " |")
 
 
 def main():
@@ -98,14 +131,16 @@ def main():
     ap.add_argument("--dir", default="tank_verdicts")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--tables", nargs="+", metavar="PAIRS_CSV")
+    ap.add_argument("--tolerance", type=float, default=TOLERANCE,
+                    help="the coincidence tolerance the tables were made with (default %(default)s)")
     a = ap.parse_args()
     if a.tables:
-        table(a.tables)
+        table(a.tables, a.tolerance)
         return
     if not a.sasnav or not a.seeds:
         ap.error("SASNAV and --seeds S0 N, or --tables FILES")
     s0, n = a.seeds
-    table([run_seed(a.sasnav, s, a.dir, a.threads) for s in range(s0, s0 + n)])
+    table([run_seed(a.sasnav, s, a.dir, a.threads) for s in range(s0, s0 + n)], a.tolerance)
 
 
 if __name__ == "__main__":

@@ -160,9 +160,9 @@ typedef struct {
                                  which the estimate is "ambiguous" (the
                                  larger of this and verdict_margin_min;
                                  default 1.25: the attraction's partial
-                                 slips, 7-10 mm on the tank, came with
-                                 margins of 1.16-1.64; docs/validation.md,
-                                 "Flagged pairs") */
+                                 slips, 6.8-12.7 mm on the tank, came
+                                 with margins of 1.16-1.64;
+                                 docs/validation.md, "Flagged pairs") */
     int nthreads;          /* OpenMP threads (0 = default; see "Threads" above) */
     sasnav_op_opts op;     /* operator options (default: sasnav_op's, with
                               tolerance 1e-3: docs/estimator.md) */

@@ -700,7 +700,9 @@ static int reestimate(nav_ctx *ctx, sasnav_navigate_pair *np, sasnav_pose start,
     if (rc || r.status == SASNAV_ERR_NO_OVERLAP) return SASNAV_OK;
     /* With aiding, a new estimate may be up to the verdict's margin worse
      * in eta than the first (the data could not tell the two apart: that
-     * is what the aiding is for); without, it must be lower. */
+     * is what the aiding is for); without, it must be lower. The margin
+     * is verdict_margin_min on every scene, also where a compact one's
+     * verdict asks verdict_margin_compact: the stricter choice here. */
     double tol = isfinite(sa.x + sa.theta) ? ctx->opts->pair.verdict_margin_min : 1.0;
     int better = !usable(np) || !require_lower || r.eta < tol * np->result.eta;
     if (!better || !agrees(ctx, r.error, a, sa)) return SASNAV_OK;

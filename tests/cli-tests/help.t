@@ -293,8 +293,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       (default 0.6; see 'sasnav pair --help')
     --coincidence F   compact scenes: a pair within F phase-centre spacings
                       of a coincidence is 'ambiguous' (default 0.10, 0 off;
-                      with --virtual-array off unless given; see 'sasnav
-                      pair --help')
+                      with --virtual-array off unless given); compact
+                      scenes also need an eta margin of 1.25 for 'ok' (see
+                      'sasnav pair --help')
     --final C         each pair's final-stage criterion: auto (default), eta
                       or joint (see 'sasnav pair --help')
     --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)
