@@ -4,6 +4,7 @@ scenes) against the truth: how many slipped pairs come back "ok"
 (docs/validation.md, "Flagged pairs"; docs/estimator.md, "Verdict").
 
 usage: python3 bench/tank_verdicts.py SASNAV --seeds S0 N [--dir DIR] [--threads T]
+           [--tank-opts "OPTS"] [--ingest-opts "OPTS"]
        python3 bench/tank_verdicts.py --tables DIR/t*/val/pairs.csv [--tolerance T]
 
 For each seed: `sasnav tank -o REC --seed S`, `sasnav ingest --wav REC -o
@@ -22,6 +23,7 @@ only.
 import argparse
 import csv
 import os
+import shlex
 import shutil
 import subprocess
 import sys
@@ -34,12 +36,12 @@ GRID_TOL = (0.04, 0.05, 0.06, 0.08, 0.10)
 GRID_MARGIN = (1.15, 1.20, 1.25, 1.30, 1.40, 1.50)
 
 
-def run_seed(sasnav, seed, top, threads):
+def run_seed(sasnav, seed, top, threads, tank_opts="", ingest_opts=""):
     d = os.path.join(top, f"t{seed}")
     os.makedirs(d, exist_ok=True)
     rec, h5, val = os.path.join(d, "rec"), os.path.join(d, "tank.h5"), os.path.join(d, "val")
-    steps = [[sasnav, "tank", "-o", rec, "--seed", str(seed)],
-             [sasnav, "ingest", "--wav", rec, "-o", h5],
+    steps = [[sasnav, "tank", "-o", rec, "--seed", str(seed)] + shlex.split(tank_opts),
+             [sasnav, "ingest", "--wav", rec, "-o", h5] + shlex.split(ingest_opts),
              [sasnav, "validate", h5, "--fix-yaw", "--surge-sigma", "0.025", "-o", val,
               "--threads", str(threads)]]
     for cmd in steps:
@@ -131,6 +133,10 @@ def main():
     ap.add_argument("--dir", default="tank_verdicts")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--tables", nargs="+", metavar="PAIRS_CSV")
+    ap.add_argument("--tank-opts", default="",
+                    help="more options of `sasnav tank` (another scene, e.g. \"--plate-range 2.0\")")
+    ap.add_argument("--ingest-opts", default="",
+                    help="more options of `sasnav ingest` (e.g. \"--range 2.0\" with that plate)")
     ap.add_argument("--tolerance", type=float, default=TOLERANCE,
                     help="the coincidence tolerance the tables were made with (default %(default)s)")
     a = ap.parse_args()
@@ -140,7 +146,8 @@ def main():
     if not a.sasnav or not a.seeds:
         ap.error("SASNAV and --seeds S0 N, or --tables FILES")
     s0, n = a.seeds
-    table([run_seed(a.sasnav, s, a.dir, a.threads) for s in range(s0, s0 + n)], a.tolerance)
+    table([run_seed(a.sasnav, s, a.dir, a.threads, a.tank_opts, a.ingest_opts) for s in range(s0, s0 + n)],
+          a.tolerance)
 
 
 if __name__ == "__main__":
