@@ -69,7 +69,7 @@ static const char *help =
     "  --eta-max E       final eta above which a pair's verdict is 'failed'\n"
     "                    (default 0.6; see 'sasnav pair --help')\n"
     "  --coincidence F   compact scenes: a pair within F phase-centre spacings\n"
-    "                    of a coincidence is 'ambiguous' (default 0.10, 0 off;\n"
+    "                    of a coincidence is 'ambiguous' (default 0.5: all, 0 off;\n"
     "                    with --virtual-array off unless given); compact\n"
     "                    scenes also need an eta margin of 1.25 for 'ok' (see\n"
     "                    'sasnav pair --help')\n"

@@ -63,7 +63,7 @@ static const char *help =
     "                    \"A survey-class system\")\n"
     "  --coincidence F   on compact scenes, an estimate within F phase-centre\n"
     "                    spacings of a phase-centre coincidence is 'ambiguous'\n"
-    "                    (its surge is not resolved there; default 0.10, 0 off;\n"
+    "                    (its surge is not resolved there; default 0.5: all, 0 off;\n"
     "                    compact scenes also need an eta margin of 1.25 for\n"
     "                    'ok': docs/estimator.md, \"Verdict\")\n"
     "  --threads N       OpenMP threads\n"

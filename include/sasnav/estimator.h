@@ -155,7 +155,11 @@ typedef struct {
                                  to the coincidence from up to 0.4 spacing
                                  away (docs/estimator.md, "Known weakness:
                                  attraction to phase-centre coincidence");
-                                 default 0.10, 0 never */
+                                 default 0.5, i.e. every estimate whose
+                                 phase centres overlap p's: on four tank
+                                 scenes tolerances of 0.04-0.25 all left
+                                 slipped pairs "ok" (docs/validation.md,
+                                 "Flagged pairs"); 0 never */
     double verdict_margin_compact;/* on compact scenes, the margin below
                                  which the estimate is "ambiguous" (the
                                  larger of this and verdict_margin_min;

@@ -38,7 +38,7 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->blur = 0.075;
     o->verdict_eta_max = 0.6;
     o->verdict_margin_min = 1.15;
-    o->verdict_coincidence = 0.10;
+    o->verdict_coincidence = 0.5;
     o->verdict_margin_compact = 1.25;
     o->blur_cross = 0.0;
     o->error_extent = 0.0;

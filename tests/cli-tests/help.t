@@ -149,7 +149,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       "A survey-class system")
     --coincidence F   on compact scenes, an estimate within F phase-centre
                       spacings of a phase-centre coincidence is 'ambiguous'
-                      (its surge is not resolved there; default 0.10, 0 off;
+                      (its surge is not resolved there; default 0.5: all, 0 off;
                       compact scenes also need an eta margin of 1.25 for
                       'ok': docs/estimator.md, "Verdict")
     --threads N       OpenMP threads
@@ -292,7 +292,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --eta-max E       final eta above which a pair's verdict is 'failed'
                       (default 0.6; see 'sasnav pair --help')
     --coincidence F   compact scenes: a pair within F phase-centre spacings
-                      of a coincidence is 'ambiguous' (default 0.10, 0 off;
+                      of a coincidence is 'ambiguous' (default 0.5: all, 0 off;
                       with --virtual-array off unless given); compact
                       scenes also need an eta margin of 1.25 for 'ok' (see
                       'sasnav pair --help')
