@@ -28,9 +28,9 @@ import shutil
 import subprocess
 import sys
 
-SLIP = 0.025 / 4  # m: a quarter of the tank's phase-centre spacing
 MARGIN_MIN = 1.15  # opts.verdict_margin_min
 SPACING = 0.025  # m: the tank's phase-centre spacing
+SLIP = SPACING / 4  # m: a slipped pair's surge error, more than a quarter spacing
 TOLERANCE = 0.5  # opts.verdict_coincidence's default (the self-check's; --tolerance)
 GRID_TOL = (0.04, 0.06, 0.08, 0.10, 0.15, 0.20, 0.25, 0.5)
 GRID_MARGIN = (1.15, 1.20, 1.25, 1.30, 1.40, 1.50)

@@ -1391,7 +1391,7 @@ static int hand_out_pairs(nav_ctx *ctx, sasnav_navigation *out)
     for (int j = 0; j < out->n_pairs; j++) {
         sasnav_navigate_pair np;
         get_pair(ctx, j, &np);
-        out->n_failed += np.status != SASNAV_OK && np.status != SASNAV_ERR_NOT_CONVERGED;
+        out->n_failed += !usable(&np);
     }
     if (ctx->opts->compact_pairs) {
         pair_store *s = malloc(sizeof *s);
