@@ -18,7 +18,7 @@ static const char *help =
     "usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]\n"
     "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
     "                       [--cross-extent M] [--range-extent M] [--eta-max E] [--final C]\n"
-    "                       [--search-grid G] [--coincidence F]\n"
+    "                       [--search-grid G] [--coincidence F] [--compact-contrast C]\n"
     "                       [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]\n"
     "                       [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]\n"
     "                       [--threads N] [--gpu] [--json] [--checkpoint FILE]\n"
@@ -73,6 +73,9 @@ static const char *help =
     "                    with --virtual-array off unless given); compact\n"
     "                    scenes also need an eta margin of 1.25 for 'ok' (see\n"
     "                    'sasnav pair --help')\n"
+    "  --compact-contrast C  the contrast of p's image above which a pair's\n"
+    "                    scene is compact for its verdict (default 4; 'inf':\n"
+    "                    never; see 'sasnav pair --help')\n"
     "  --final C         each pair's final-stage criterion: auto (default), eta\n"
     "                    or joint (see 'sasnav pair --help')\n"
     "  --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)\n"
@@ -277,6 +280,7 @@ static void print_json(const char *input, const sasnav_navigation *nav)
             json_object_set_new(o, "final_criterion",
                                 json_string(sasnav_final_criterion_name(np->result.final_criterion)));
             json_object_set_new(o, "search_grid", json_string(sasnav_search_grid_name(np->result.search_grid)));
+            json_object_set_new(o, "contrast", json_real(np->result.contrast));
         }
         json_object_set_new(o, "candidates", candidates_json(&np->result));
         if (nav->aiding_used) {
@@ -510,7 +514,7 @@ int cmd_navigate(int argc, char **argv)
         {"keep-length", no_argument, 0, 'K'}, {"align-heading", no_argument, 0, 'H'},
         {"gpu", no_argument, 0, 'g'},        {"eta-max", required_argument, 0, 'e'},
         {"final", required_argument, 0, 'c'},  {"search-grid", required_argument, 0, 'P'},
-        {"coincidence", required_argument, 0, 'J'},
+        {"coincidence", required_argument, 0, 'J'}, {"compact-contrast", required_argument, 0, 'Q'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -520,13 +524,14 @@ int cmd_navigate(int argc, char **argv)
     long threads = 0, k = no.pair.k, iters = no.pair.i;
     int json = 0, opt, anchor_truth = 0, have_first = 0, n_general = 0, estimate_yaw = 0;
     long vk = 0, vstride = 0, viters = 2, vinter = 1;
-    int have_cross = 0, have_range = 0, have_coinc = 0, closed = 0, keep_length = 0, align_heading = 0;
+    int have_cross = 0, have_range = 0, have_coinc = 0, have_cc = 0, closed = 0, keep_length = 0, align_heading = 0;
     double first[3] = {0, 0, 0};
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         /* Options of the pair navigation alone (refused with --virtual-array). */
         if (strchr("mLyfAFUNBSRMCgeP", opt)) n_general++;
         have_coinc |= opt == 'J';
+        have_cc |= opt == 'Q';
         have_cross |= opt == 'X';
         have_range |= opt == 'E';
         switch (opt) {
@@ -582,6 +587,11 @@ int cmd_navigate(int argc, char **argv)
             if (cli_parse_double(optarg, &no.pair.verdict_coincidence) ||
                 !(no.pair.verdict_coincidence >= 0 && no.pair.verdict_coincidence <= 0.5))
                 return cli_usage("navigate", "--coincidence needs a fraction of the phase-centre spacing in [0, 0.5]");
+            break;
+        case 'Q':
+            if (!strcmp(optarg, "inf")) no.pair.verdict_contrast = INFINITY;
+            else if (cli_parse_double(optarg, &no.pair.verdict_contrast) || !(no.pair.verdict_contrast >= 0))
+                return cli_usage("navigate", "--compact-contrast needs a contrast >= 0 (or inf)");
             break;
         case 'U':
             if (cli_parse_double(optarg, &no.pair.surge_sigma) || !(no.pair.surge_sigma >= 0))
@@ -659,7 +669,7 @@ int cmd_navigate(int argc, char **argv)
             return cli_usage("navigate", "--virtual-array takes only --interleave, --stride, "
                                          "--iterations, --closed, --keep-length, --align-heading, "
                                          "--estimate-yaw, --k, --i, --cross-extent, --range-extent, "
-                                         "--coincidence, --threads and --json");
+                                         "--coincidence, --compact-contrast, --threads and --json");
         if (cli_mpi_size() > 1)
             return cli_usage("navigate", "--virtual-array runs in one process (use --threads)");
         sasnav_virtual_opts vo;
@@ -680,6 +690,7 @@ int cmd_navigate(int argc, char **argv)
         vo.pair.cross_extent = have_cross ? no.pair.cross_extent : 0.0;
         vo.pair.range_extent = have_range ? no.pair.range_extent : 0.0;
         if (have_coinc) vo.pair.verdict_coincidence = no.pair.verdict_coincidence;
+        if (have_cc) vo.pair.verdict_contrast = no.pair.verdict_contrast;
         return navigate_virtual(input, output, &vo, json);
     }
     no.pair.k = (int)k;

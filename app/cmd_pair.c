@@ -16,7 +16,8 @@ static const char *help =
     "                   [--prior S,W,Y] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
     "                   [--cross-extent M] [--range-extent M]\n"
     "                   [--no-global] [--search-grid G] [--subintervals N]\n"
-    "                   [--eta-max E] [--coincidence F] [--final C]\n"
+    "                   [--eta-max E] [--coincidence F] [--compact-contrast C]\n"
+    "                   [--final C]\n"
     "                   [--range R] [--lag-model fixed|motion] [--threads N] [--gpu]\n"
     "\n"
     "Estimates the motion error (displacement minus nominal) of ping q relative\n"
@@ -66,6 +67,10 @@ static const char *help =
     "                    (its surge is not resolved there; default 0.5: all, 0 off;\n"
     "                    compact scenes also need an eta margin of 1.25 for\n"
     "                    'ok': docs/estimator.md, \"Verdict\")\n"
+    "  --compact-contrast C  the intensity contrast of p's image above which\n"
+    "                    the scene is compact for the verdict (default 4;\n"
+    "                    speckle about 1, simulated seabeds up to 3.9; 'inf':\n"
+    "                    never; reported as 'contrast' in --json)\n"
     "  --threads N       OpenMP threads\n"
     "  --gpu             the error evaluations on a CUDA GPU (builds configured\n"
     "                    with -DSASNAV_CUDA=ON; the same estimates to float\n"
@@ -112,13 +117,14 @@ int cmd_pair(int argc, char **argv)
         {"range-extent", required_argument, 0, 'E'}, {"gpu", no_argument, 0, 'g'},
         {"eta-max", required_argument, 0, 'e'}, {"help", no_argument, 0, 'h'},
         {"final", required_argument, 0, 'C'},   {"search-grid", required_argument, 0, 'f'},
-        {"coincidence", required_argument, 0, 'c'},
+        {"coincidence", required_argument, 0, 'c'}, {"compact-contrast", required_argument, 0, 'T'},
         {0, 0, 0, 0}};
     long p = 0, q = 1, k = 8, iters = 8, nsub = 1, threads = 0;
     int json = 0, no_global = 0, have_p = 0, have_q = 0, motion_lag = 0, fix_yaw = 0, gpu = 0,
         search_grid = SASNAV_SEARCH_AUTO;
     double prior[3] = {0, 0, 0}, range = NAN, box[3] = {NAN, NAN, NAN}, yaw_sigma = 0, cross_extent = 0,
-           surge_sigma = 0, range_extent = 0, eta_max = 0, coincidence = NAN;
+           surge_sigma = 0, range_extent = 0, eta_max = 0, coincidence = NAN,
+           compact_contrast = NAN;
     int final_c = SASNAV_FINAL_AUTO;
     int opt;
     optind = 1;
@@ -156,6 +162,11 @@ int cmd_pair(int argc, char **argv)
         case 'c':
             if (cli_parse_double(optarg, &coincidence) || !(coincidence >= 0 && coincidence <= 0.5))
                 return cli_usage("pair", "--coincidence needs a fraction of the phase-centre spacing in [0, 0.5]");
+            break;
+        case 'T':
+            if (!strcmp(optarg, "inf")) compact_contrast = INFINITY;
+            else if (cli_parse_double(optarg, &compact_contrast) || !(compact_contrast >= 0))
+                return cli_usage("pair", "--compact-contrast needs a contrast >= 0 (or inf)");
             break;
         case 'C':
             final_c = sasnav_final_criterion_parse(optarg);
@@ -229,6 +240,7 @@ int cmd_pair(int argc, char **argv)
     if (range_extent > 0) po.range_extent = range_extent;
     if (eta_max > 0) po.verdict_eta_max = eta_max;
     if (!isnan(coincidence)) po.verdict_coincidence = coincidence;
+    if (!isnan(compact_contrast)) po.verdict_contrast = compact_contrast;
     po.final_criterion = final_c;
     if (sasnav_pair_opts_check(&po)) {
         sasnav_run_free(run);
@@ -294,6 +306,7 @@ int cmd_pair(int argc, char **argv)
         json_object_set_new(root, "final_criterion", json_string(sasnav_final_criterion_name(r0->final_criterion)));
         json_object_set_new(root, "joint_rejected", json_boolean(r0->joint_rejected));
         json_object_set_new(root, "search_grid", json_string(sasnav_search_grid_name(r0->search_grid)));
+        json_object_set_new(root, "contrast", json_real(r0->contrast));
         json_object_set_new(root, "overlap", json_real(r0->overlap));
         json_object_set_new(root, "ambiguity", json_real(r0->ambiguity));
         json_object_set_new(root, "evaluations", json_integer(r0->evaluations));

@@ -5,7 +5,7 @@ scenes) against the truth: how many slipped pairs come back "ok"
 
 usage: python3 bench/tank_verdicts.py SASNAV --seeds S0 N [--dir DIR] [--threads T]
            [--tank-opts "OPTS"] [--ingest-opts "OPTS"]
-       python3 bench/tank_verdicts.py --tables DIR/t*/val/pairs.csv [--tolerance T]
+       python3 bench/tank_verdicts.py --tables DIR/t*/val/pairs.csv [--tolerance T] [--gate G]
 
 For each seed: `sasnav tank -o REC --seed S`, `sasnav ingest --wav REC -o
 tank.h5`, `sasnav validate tank.h5 --fix-yaw --surge-sigma 0.025 -o val`
@@ -17,8 +17,10 @@ coincidence; the same for the verdict without the coincidence rule (the
 margin alone: what the verdict was before it), recomputed from the
 `margin` column; then the verdicts recomputed for other coincidence
 tolerances and compact-scene margins (`--grid`; docs/validation.md, "A
-wider tolerance and a compact scene's margin"). Python's standard library
-only.
+wider tolerance and a compact scene's margin"), and for other contrast
+gates of the compact-scene rules (`--gate`: the gate the tables were made
+with; docs/validation.md, "Scenes just under the compact gate"). Python's
+standard library only.
 """
 import argparse
 import csv
@@ -32,6 +34,8 @@ MARGIN_MIN = 1.15  # opts.verdict_margin_min
 SPACING = 0.025  # m: the tank's phase-centre spacing
 SLIP = SPACING / 4  # m: a slipped pair's surge error, more than a quarter spacing
 TOLERANCE = 0.5  # opts.verdict_coincidence's default (the self-check's; --tolerance)
+GATE = 4.0  # opts.verdict_contrast's default (--gate): compact for the verdict above it
+GRID_GATE = (3.5, 4.0, 4.25, 4.5, 4.75, 5.0)
 GRID_TOL = (0.04, 0.06, 0.08, 0.10, 0.15, 0.20, 0.25, 0.5)
 GRID_MARGIN = (1.15, 1.20, 1.25, 1.30, 1.40, 1.50)
 
@@ -69,7 +73,7 @@ def summary(label, rows):
             f"p95 {quantile(err, 0.95):.2f} / max {max(err) if err else float('nan'):.2f} mm")
 
 
-def table(paths, tolerance=TOLERANCE):
+def table(paths, tolerance=TOLERANCE, gate=GATE):
     rows = []
     for p in paths:
         with open(p) as f:
@@ -98,10 +102,11 @@ def table(paths, tolerance=TOLERANCE):
         if r["verdict"] == "ok":
             print(f"  passed as ok: K = {r['k']} ({r['p']}, {r['q']}), surge error "
                   f"{1e3 * float(r['error_surge']):+.2f} mm, estimate {1e3 * float(r['surge']):+.3f} mm")
-    grid(rows, slipped, tolerance)
+    grid(rows, slipped, tolerance, gate)
+    gates(rows, slipped)
 
 
-def grid(rows, slipped, tolerance):
+def grid(rows, slipped, tolerance, gate):
     """The verdicts recomputed for other coincidence tolerances (rows) and
     compact-scene margins (columns): "ok" pairs / slipped among them. The
     tank's pairs are a whole number of plotter steps of one spacing apart,
@@ -112,7 +117,10 @@ def grid(rows, slipped, tolerance):
     def dist(r):
         u = float(r["surge"]) / SPACING
         return abs(u - round(u))
-    miss = sum(1 for r in rows if (dist(r) < tolerance) != (r["coincidence"] == "1"))
+
+    def compact(r):  # tables of builds before the contrast column: every tank pair was compact
+        return "contrast" not in r or float(r["contrast"]) > gate
+    miss = sum(1 for r in rows if (compact(r) and dist(r) < tolerance) != (r["coincidence"] == "1"))
     print(f"verdicts recomputed (\"ok\" / slipped among them; {miss} of {len(rows)} pairs disagree "
           f"with the coincidence column at tolerance {tolerance}):")
     print("| tolerance \\ margin | " + " | ".join(f"{m:.2f}" for m in GRID_MARGIN) + " |")
@@ -124,6 +132,30 @@ def grid(rows, slipped, tolerance):
             ok = [r for r in rows if r["status"] == "ok" and float(r["margin"]) >= m and dist(r) >= tol]
             cells.append(f"{len(ok)} / {sum(1 for r in ok if id(r) in slip_ids)}")
         print(f"| {tol:.2f} | " + " | ".join(cells) + " |")
+
+
+def gates(rows, slipped):
+    """The verdicts recomputed for other contrast gates of the compact-scene
+    rules (opts.verdict_contrast), with the default tolerance (0.5: every
+    pair whose phase centres overlap, as all the tank's pairs do, is at a
+    coincidence) and margins: above the gate "ambiguous", at or below it
+    "ok" where the margin reaches verdict_margin_min; "failed" and
+    "no_overlap" stay. Needs the `contrast` column."""
+    if not rows or "contrast" not in rows[0]:
+        return
+    c = sorted(float(r["contrast"]) for r in rows)
+    sc = sorted(float(r["contrast"]) for r in slipped)
+    print(f"contrast of p's image: min {c[0]:.2f}, median {quantile(c, 0.5):.2f}, max {c[-1]:.2f}"
+          + (f"; of the slipped pairs {sc[0]:.2f} .. {sc[-1]:.2f}" if sc else ""))
+    print("| compact-verdict gate | \"ok\" pairs | slipped pairs passed as \"ok\" (contrast) |")
+    print("|---|---|---|")
+    slip_ids = {id(r) for r in slipped}
+    for g in GRID_GATE:
+        ok = [r for r in rows if r["verdict"] not in ("failed", "no_overlap") and
+              float(r["contrast"]) <= g and float(r["margin"]) >= MARGIN_MIN]
+        bad = [r for r in ok if id(r) in slip_ids]
+        print(f"| {g:.2f} | {len(ok)} | {len(bad)}"
+              + (" (" + ", ".join(f"{float(r['contrast']):.2f}" for r in bad) + ")" if bad else "") + " |")
 
 
 def main():
@@ -139,15 +171,17 @@ def main():
                     help="more options of `sasnav ingest` (e.g. \"--range 2.0\" with that plate)")
     ap.add_argument("--tolerance", type=float, default=TOLERANCE,
                     help="the coincidence tolerance the tables were made with (default %(default)s)")
+    ap.add_argument("--gate", type=float, default=GATE,
+                    help="the compact-verdict contrast gate the tables were made with (default %(default)s)")
     a = ap.parse_args()
     if a.tables:
-        table(a.tables, a.tolerance)
+        table(a.tables, a.tolerance, a.gate)
         return
     if not a.sasnav or not a.seeds:
         ap.error("SASNAV and --seeds S0 N, or --tables FILES")
     s0, n = a.seeds
     table([run_seed(a.sasnav, s, a.dir, a.threads, a.tank_opts, a.ingest_opts) for s in range(s0, s0 + n)],
-          a.tolerance)
+          a.tolerance, a.gate)
 
 
 if __name__ == "__main__":

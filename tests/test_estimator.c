@@ -268,14 +268,17 @@ static void check_verdict(void)
          * from its definition: the along-track displacement within
          * opts.verdict_coincidence phase-centre spacings (d = 2.5 cm, half the receiver pitch) of
          * a multiple of it shorter than the array (phase centres of q on
-         * p's), on a compact scene (contrast above 5). */
+         * p's), on a scene compact for the verdict (contrast above
+         * opts.verdict_contrast, 4). */
         double d = 0.5 * (run->array.rx_u[1] - run->array.rx_u[0]);
         double u = r.displacement.x / d;
-        int expect = pair_contrast(pair) > po.joint_contrast_max && fabs(nearbyint(u)) < run->array.n_rx &&
+        int expect = pair_contrast(pair) > po.verdict_contrast && fabs(nearbyint(u)) < run->array.n_rx &&
                      fabs(u - nearbyint(u)) < po.verdict_coincidence;
         printf("point target: contrast %.2f, displacement %.3f spacings, coincidence %d\n",
                pair_contrast(pair), u, r.coincidence);
         CHECK(pair_contrast(pair) > po.joint_contrast_max, "point target's contrast %.2f", pair_contrast(pair));
+        CHECK(r.contrast == pair_contrast(pair), "reported contrast %.3f, the estimator's %.3f", r.contrast,
+              pair_contrast(pair));
         CHECK(r.coincidence == expect, "coincidence %d at %.4f spacings, expected %d", r.coincidence, u, expect);
     }
     sasnav_pair_destroy(pair);
@@ -286,11 +289,20 @@ static void check_verdict(void)
      * scene's margin (opts.verdict_margin_compact): the same estimate
      * finished from a first result whose margin is set to 1.2 (between
      * verdict_margin_min, 1.15, and the compact default, 1.25) is
-     * "ambiguous" with the default and "ok" with the compact margin at 1. */
-    for (int t = 0; t < 4; t++) {
+     * "ambiguous" with the default and "ok" with the compact margin at 1.
+     * Last, the verdict's own gate (opts.verdict_contrast), apart from the
+     * one that picks the search grid and final stage (joint_contrast_max):
+     * with the latter above the point target's contrast (the speckle
+     * scenes' final stage) the verdict's rules still apply, tolerance half a spacing:
+     * "ambiguous" (t = 4); with the verdict's gate at infinity they do
+     * not: "ok" (t = 5). */
+    for (int t = 0; t < 6; t++) {
         sasnav_pair_opts pc = po;
-        pc.verdict_coincidence = t == 0 ? 0.5 : 0.0;
+        pc.verdict_coincidence = t == 0 || t >= 4 ? 0.5 : 0.0;
         if (t == 3) pc.verdict_margin_compact = 1.0;
+        if (t == 4) pc.joint_contrast_max = 1e9;
+        if (t == 5) pc.verdict_contrast = INFINITY;
+        int flag = t == 0 || t == 4;
         pair = NULL;
         CHECK_OK(sasnav_pair_create(&run->sys, &run->array, &run->win, &pc, &pair));
         if (!pair) continue;
@@ -302,10 +314,11 @@ static void check_verdict(void)
         CHECK_OK(sasnav_pair_estimate_from(pair, start, &r));
         printf("point target from the truth, coincidence tolerance %.1f: verdict %s, coincidence %d, eta %.3f\n",
                pc.verdict_coincidence, sasnav_verdict_name(r.verdict), r.coincidence, r.eta);
-        CHECK(r.coincidence == (t == 0), "tolerance %.1f: coincidence %d", pc.verdict_coincidence, r.coincidence);
-        CHECK(r.verdict == (t == 0 ? SASNAV_VERDICT_AMBIGUOUS : SASNAV_VERDICT_OK),
-              "tolerance %.1f: verdict %s", pc.verdict_coincidence, sasnav_verdict_name(r.verdict));
-        if (t >= 2) {
+        CHECK(r.coincidence == flag, "case %d, tolerance %.1f: coincidence %d", t, pc.verdict_coincidence,
+              r.coincidence);
+        CHECK(r.verdict == (flag ? SASNAV_VERDICT_AMBIGUOUS : SASNAV_VERDICT_OK), "case %d, tolerance %.1f: verdict %s",
+              t, pc.verdict_coincidence, sasnav_verdict_name(r.verdict));
+        if (t == 2 || t == 3) {
             CHECK(po.verdict_margin_min < 1.2 && 1.2 < po.verdict_margin_compact, "default margins %.2f, %.2f",
                   po.verdict_margin_min, po.verdict_margin_compact);
             sasnav_pair_result first = r, fin;
@@ -353,7 +366,7 @@ static void check_verdict(void)
         /* expected from the displacement and the layouts above: q's phase
          * centres at (l + t / 4) d + x, p's at l d (common offset aside) */
         double u = r.displacement.x / d + 0.25 * t, m = nearbyint(u);
-        int expect = pair_contrast(pair) > pc.joint_contrast_max && fabs(m) < n && fabs(u - m) < 0.1;
+        int expect = pair_contrast(pair) > pc.verdict_contrast && fabs(m) < n && fabs(u - m) < 0.1;
         printf("point target by channels, q moved %.2f spacing: displacement %.3f spacings, coincidence %d\n",
                0.25 * t, r.displacement.x / d, r.coincidence);
         CHECK(r.coincidence == expect, "by channels, q moved %.2f: coincidence %d, expected %d", 0.25 * t,
@@ -395,7 +408,7 @@ static void check_verdict(void)
             CHECK_OK(sasnav_pair_estimate_from(pair, (sasnav_pose){0.005, 0.002, 0.004}, &r));
             printf("speckle pair: contrast %.2f, verdict %s, coincidence %d\n", pair_contrast(pair),
                    sasnav_verdict_name(r.verdict), r.coincidence);
-            CHECK(pair_contrast(pair) <= pc.joint_contrast_max && !r.coincidence && r.verdict == SASNAV_VERDICT_OK,
+            CHECK(pair_contrast(pair) <= pc.verdict_contrast && !r.coincidence && r.verdict == SASNAV_VERDICT_OK,
                   "speckle pair: contrast %.2f, coincidence %d, verdict %s", pair_contrast(pair), r.coincidence,
                   sasnav_verdict_name(r.verdict));
             sasnav_pair_result first = r, fin;

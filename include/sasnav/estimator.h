@@ -145,7 +145,7 @@ typedef struct {
                                  the chosen one's below which the estimate
                                  is "ambiguous" (default 1.15) */
     double verdict_coincidence;/* on compact scenes (the intensity contrast of
-                                 p's reconstruction above joint_contrast_max)
+                                 p's reconstruction above verdict_contrast)
                                  an estimate whose along-track displacement
                                  lies within this fraction of the
                                  phase-centre spacing of a multiple of it
@@ -200,6 +200,17 @@ typedef struct {
                               (docs/estimator.md: on trajectory pairs it
                               did harm; the contrast rule keeps compact
                               scenes on eta's stage) */
+    double verdict_contrast;  /* the verdict's compact-scene rules
+                              (verdict_margin_compact, verdict_coincidence)
+                              apply where the intensity contrast of p's
+                              reconstruction exceeds this (default 4: the
+                              simulated seabeds reach 3.9 where a bright
+                              patch fills the beam, and tank scenes of
+                              contrast 4.6-5.0, under joint_contrast_max,
+                              slipped with "ok" verdicts; docs/validation.md,
+                              "Scenes just under the compact gate"); the
+                              search grid and final stage keep
+                              joint_contrast_max; INFINITY: never */
 } sasnav_pair_opts;
 
 /* The final stage's criterion (sasnav_pair_opts.final_criterion):
@@ -333,6 +344,14 @@ typedef struct {
                                   (opts.verdict_coincidence), which makes
                                   it "ambiguous" at best: its surge is not
                                   resolved there */
+    double contrast;           /* the intensity contrast (standard deviation
+                                  over mean of |rho_p|^2 over the error
+                                  window) of p's full-pixel reconstruction:
+                                  about 1 on speckle, above
+                                  opts.joint_contrast_max on the compact
+                                  scenes whose rules (search grid, margin,
+                                  coincidence) the estimate was judged by;
+                                  0 where no estimate was made (DPCA) */
 } sasnav_pair_result;
 
 typedef struct sasnav_pair sasnav_pair;

@@ -61,6 +61,7 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->joint_shift_max = 0.125;
     o->joint_eta_ratio = INFINITY;
     o->joint_contrast_max = 5.0;
+    o->verdict_contrast = 4.0;
 }
 
 static double nrm2(const sasnav_cfloat *v, size_t n)
@@ -306,6 +307,8 @@ int sasnav_pair_opts_check(const sasnav_pair_opts *o)
     if (o->search_grid < SASNAV_SEARCH_AUTO || o->search_grid > SASNAV_SEARCH_COARSE)
         OPT_FAIL("search_grid %d is not a sasnav_search_grid", o->search_grid);
     if (!(o->joint_contrast_max >= 0)) OPT_FAIL("joint_contrast_max %g must be >= 0", o->joint_contrast_max);
+    if (!(o->verdict_contrast >= 0))
+        OPT_FAIL("verdict_contrast %g must be >= 0 (inf: no compact-scene verdict)", o->verdict_contrast);
     if (!(o->joint_eta_ratio >= 1))
         OPT_FAIL("joint_eta_ratio %g must be >= 1 (inf: never reject the joint estimate)", o->joint_eta_ratio);
     if (o->joint_k < 1) OPT_FAIL("joint_k = %d must be >= 1", o->joint_k);

@@ -1118,7 +1118,7 @@ static void phase_centres(const sasnav_pair *pr, int q, double *x)
  * p's (on a uniform array: the displacement within that tolerance of a
  * multiple of the spacing shorter than the array; disjoint apertures share
  * none), on a compact scene (p's intensity contrast above
- * joint_contrast_max, the rule that picks the fine search grid): there the
+ * verdict_contrast, compact_verdict below): there the
  * criterion is drawn to the coincidence from up to about 0.4 spacing away,
  * so the surge it reports is not a measurement (docs/estimator.md, "Known
  * weakness: attraction to phase-centre coincidence"). The phase centres
@@ -1127,11 +1127,21 @@ static void phase_centres(const sasnav_pair *pr, int q, double *x)
  * between the pings is left out: it moves a phase centre on the array's
  * axis, x from the centroid, by x yaw^2 / 2 along track (20 microns at
  * 0.4 m and 1e-2 rad). */
+/* Whether the verdict takes the compact-scene rules: p's intensity
+ * contrast above opts.verdict_contrast (lower than joint_contrast_max,
+ * which picks the search grid and final stage: tank scenes just under
+ * that gate slipped with "ok" verdicts; docs/validation.md, "Scenes just
+ * under the compact gate"). */
+static int compact_verdict(const sasnav_pair *pr)
+{
+    return pair_contrast(pr) > sasnav_pair_options(pr)->verdict_contrast;
+}
+
 static int at_coincidence(const sasnav_pair *pr, const sasnav_pair_result *res, double pc_spacing)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
     if (!(o->verdict_coincidence > 0) || !(pc_spacing > 0)) return 0;
-    if (!(pair_contrast(pr) > o->joint_contrast_max)) return 0;
+    if (!compact_verdict(pr)) return 0;
     double dx = res->displacement.x, tol = o->verdict_coincidence * pc_spacing;
     if (!isfinite(dx)) return 0;
     double xp[SASNAV_MAX_RX], xq[SASNAV_MAX_RX];
@@ -1144,13 +1154,13 @@ static int at_coincidence(const sasnav_pair *pr, const sasnav_pair_result *res, 
 }
 
 /* The margin an "ok" estimate needs: verdict_margin_min, and on a compact
- * scene (the contrast that also gates the coincidence rule) at least
+ * scene (compact_verdict, which also gates the coincidence rule) at least
  * verdict_margin_compact (docs/validation.md, "Flagged pairs"). */
 static double margin_min(const sasnav_pair *pr)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
     double m = o->verdict_margin_min;
-    if (pair_contrast(pr) > o->joint_contrast_max && o->verdict_margin_compact > m) m = o->verdict_margin_compact;
+    if (compact_verdict(pr) && o->verdict_margin_compact > m) m = o->verdict_margin_compact;
     return m;
 }
 
@@ -1158,6 +1168,7 @@ static double margin_min(const sasnav_pair *pr)
 static void judge(const sasnav_pair *pr, sasnav_pair_result *res, int converged, double pc_spacing)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
+    res->contrast = pair_contrast(pr);
     res->coincidence = at_coincidence(pr, res, pc_spacing);
     if (!(res->overlap >= o->min_overlap)) res->verdict = SASNAV_VERDICT_NO_OVERLAP;
     else if (!converged || !(res->eta <= o->verdict_eta_max)) res->verdict = SASNAV_VERDICT_FAILED;
@@ -1279,6 +1290,7 @@ static int estimate(sasnav_pair *pr, int final_stage, sasnav_pair_result *res)
         res->status = SASNAV_ERR_NO_OVERLAP;
         res->verdict = SASNAV_VERDICT_NO_OVERLAP;
         res->overlap = ov;
+        res->contrast = pair_contrast(pr);
         return sasnav_set_error(SASNAV_ERR_NO_OVERLAP,
                                 "pings share no observed scene at the prior (kept energy %.2g < %.2g)",
                                 ov, o->min_overlap);

@@ -102,7 +102,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                      [--prior S,W,Y] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]
                      [--cross-extent M] [--range-extent M]
                      [--no-global] [--search-grid G] [--subintervals N]
-                     [--eta-max E] [--coincidence F] [--final C]
+                     [--eta-max E] [--coincidence F] [--compact-contrast C]
+                     [--final C]
                      [--range R] [--lag-model fixed|motion] [--threads N] [--gpu]
   
   Estimates the motion error (displacement minus nominal) of ping q relative
@@ -152,6 +153,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       (its surge is not resolved there; default 0.5: all, 0 off;
                       compact scenes also need an eta margin of 1.25 for
                       'ok': docs/estimator.md, "Verdict")
+    --compact-contrast C  the intensity contrast of p's image above which
+                      the scene is compact for the verdict (default 4;
+                      speckle about 1, simulated seabeds up to 3.9; 'inf':
+                      never; reported as 'contrast' in --json)
     --threads N       OpenMP threads
     --gpu             the error evaluations on a CUDA GPU (builds configured
                       with -DSASNAV_CUDA=ON; the same estimates to float
@@ -241,7 +246,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]
                          [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]
                          [--cross-extent M] [--range-extent M] [--eta-max E] [--final C]
-                         [--search-grid G] [--coincidence F]
+                         [--search-grid G] [--coincidence F] [--compact-contrast C]
                          [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]
                          [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]
                          [--threads N] [--gpu] [--json] [--checkpoint FILE]
@@ -296,6 +301,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       with --virtual-array off unless given); compact
                       scenes also need an eta margin of 1.25 for 'ok' (see
                       'sasnav pair --help')
+    --compact-contrast C  the contrast of p's image above which a pair's
+                      scene is compact for its verdict (default 4; 'inf':
+                      never; see 'sasnav pair --help')
     --final C         each pair's final-stage criterion: auto (default), eta
                       or joint (see 'sasnav pair --help')
     --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)
@@ -481,7 +489,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     trajectories.csv    ping, K, along-track, cross-track, yaw (aligned)
     pairs.csv           every pair estimate (motion error; its error vs the
                         truth when known), its margin, whether it sits at a
-                        phase-centre coincidence, status and verdict
+                        phase-centre coincidence, the contrast of p's image
+                        (above 5: compact-scene rules), status and verdict
     trajectories.png    along/cross-track deviation from the mean of the K
     correlation.csv     pairwise image correlations (navigated images)
     siso_J.png, simo_J.png   images with the largest K's trajectory

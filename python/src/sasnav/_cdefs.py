@@ -291,6 +291,7 @@ class PairOpts(Structure):  # estimator.h
         ("joint_shift_max", c_double),
         ("joint_contrast_max", c_double),
         ("joint_eta_ratio", c_double),
+        ("verdict_contrast", c_double),
     ]
 
 
@@ -342,6 +343,7 @@ class PairResult(Structure):  # estimator.h
         ("joint_rejected", c_int),
         ("search_grid", c_int),  # sasnav_search_grid
         ("coincidence", c_int),
+        ("contrast", c_double),
     ]
 
 

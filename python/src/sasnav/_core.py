@@ -921,7 +921,9 @@ class PairEstimate:
     "ambiguous", "failed", "no_overlap" or (DPCA) "unchecked"; margin (inf: no other
     candidate); coincidence: True where the estimate sits at a phase-centre
     coincidence on a compact scene, where its surge is not resolved (the
-    verdict is then "ambiguous" at best); candidates: list of Candidate; status: "ok" or the
+    verdict is then "ambiguous" at best); contrast: the intensity contrast of
+    p's reconstruction that decided between the speckle and the compact-scene
+    rules (0 for DPCA); candidates: list of Candidate; status: "ok" or the
     estimator's status text; result: the C struct (every field)."""
 
     p: int
@@ -947,6 +949,7 @@ class PairEstimate:
     final_criterion: str
     search_grid: str
     coincidence: bool
+    contrast: float
     result: C.PairResult = field(repr=False)
 
 
@@ -978,6 +981,7 @@ def _estimate_from_c(r, p, q, nominal, truth):
                         _final_name(r),
                         _search_grid_name(r),
                         bool(r.coincidence),
+                        r.contrast,
                         C.PairResult.from_buffer_copy(r))
 
 
