@@ -397,13 +397,13 @@ int cmd_pair(int argc, char **argv)
                r->evaluations_eta, r->applications, r->seconds,
                r->status == SASNAV_OK ? "converged" : sasnav_strerror(r->status));
         printf("time per stage: global %.2f s (%ld applications), zeta %.2f s (%ld), eta %.2f s (%ld), "
-               "final %.2f s (%ld, %d evaluations, criterion %s); search grid %s\n",
+               "final %.2f s (%ld, %d evaluations, criterion %s); search grid %s; contrast %.2f\n",
                r->seconds_global, r->applications_global, r->seconds_zeta, r->applications_zeta,
                r->seconds_eta, r->applications_eta, r->seconds_final, r->applications_final,
                r->evaluations_final,
                r->joint_rejected ? "eta, the joint misfit's estimate rejected"
                                  : sasnav_final_criterion_name(r->final_criterion),
-               sasnav_search_grid_name(r->search_grid));
+               sasnav_search_grid_name(r->search_grid), r->contrast);
         for (int kc = 0; kc < r->n_candidates; kc++) {
             const sasnav_pair_candidate *c = &r->candidates[kc];
             char scan_s[32];
