@@ -211,6 +211,16 @@ typedef struct {
                               "Scenes just under the compact gate"); the
                               search grid and final stage keep
                               joint_contrast_max; INFINITY: never */
+    double joint_coverage_min;/* AUTO: the joint misfit only where the grid's
+                              along-track extent is at least this fraction
+                              of the element beam's footprint between its
+                              first nulls at the grid's range (default
+                              0.5; the default grid covers 0.8 where the
+                              4 m cap does not bind: the paper system at
+                              10 m; 0.29 on the survey system at 70 m,
+                              whose surge errors the joint stage doubled;
+                              never with omnidirectional elements; 0:
+                              always, the rule before) */
 } sasnav_pair_opts;
 
 /* The final stage's criterion (sasnav_pair_opts.final_criterion):
@@ -219,8 +229,9 @@ typedef struct {
  *          min_s ||phi_p - T_p s||^2 + ||phi_q - T_q(sigma) s||^2 +
  *          mu ||s||^2 (joint_k CGLS iterations on the two pings stacked),
  *          then eta at (k, i) once at its minimum for the verdict;
- *   AUTO   JOINT when the pings' relative yaw is small (joint_shift_max)
- *          and the scene is speckle-like (joint_contrast_max), and (with a
+ *   AUTO   JOINT when the pings' relative yaw is small (joint_shift_max),
+ *          the scene is speckle-like (joint_contrast_max), the grid covers
+ *          enough of the beam's footprint (joint_coverage_min), and (with a
  *          finite joint_eta_ratio) eta agrees with its estimate; ETA
  *          otherwise and on the GPU path (opts.gpu). */
 typedef enum {

@@ -62,6 +62,7 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->joint_eta_ratio = INFINITY;
     o->joint_contrast_max = 5.0;
     o->verdict_contrast = 4.0;
+    o->joint_coverage_min = 0.5;
 }
 
 static double nrm2(const sasnav_cfloat *v, size_t n)
@@ -307,6 +308,8 @@ int sasnav_pair_opts_check(const sasnav_pair_opts *o)
     if (o->search_grid < SASNAV_SEARCH_AUTO || o->search_grid > SASNAV_SEARCH_COARSE)
         OPT_FAIL("search_grid %d is not a sasnav_search_grid", o->search_grid);
     if (!(o->joint_contrast_max >= 0)) OPT_FAIL("joint_contrast_max %g must be >= 0", o->joint_contrast_max);
+    if (!(o->joint_coverage_min >= 0) || !isfinite(o->joint_coverage_min))
+        OPT_FAIL("joint_coverage_min %g must be finite and >= 0", o->joint_coverage_min);
     if (!(o->verdict_contrast >= 0))
         OPT_FAIL("verdict_contrast %g must be >= 0 (inf: no compact-scene verdict)", o->verdict_contrast);
     if (!(o->joint_eta_ratio >= 1))
@@ -364,6 +367,7 @@ int sasnav_pair_create(const sasnav_system *sys, const sasnav_array *array,
         sasnav_channel_size z = sasnav_array_channel_size(array, l);
         dmax = fmax(dmax, fmax(z.rx_length, z.tx_length));
     }
+    pr->footprint = dmax > lambda ? 2.0 * o->range * lambda / sqrt(dmax * dmax - lambda * lambda) : INFINITY;
     if (!(o->cross_extent > 0)) {
         /* 80 % of the along-track footprint between the first nulls of the
          * element beam at the grid's range (1.6 m in paper-pair). Echoes

@@ -75,6 +75,9 @@ struct sasnav_pair {
                                           ping's centroid frame (set_data_channels) */
     double pc_spacing;         /* phase-centre spacing of the channel layout
                                   (0: from the array's rx_u) */
+    double footprint;          /* m, along-track footprint between the first
+                                  nulls of the widest element beam at the
+                                  grid's range (INFINITY: omnidirectional) */
     size_t nd;
     sasnav_cfloat *data_p, *data_q;
     sasnav_pose nominal;

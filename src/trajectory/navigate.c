@@ -229,7 +229,7 @@ static uint64_t options_digest(const sasnav_run *run, const sasnav_navigate_opts
                                po->surge_sigma, po->grid_step.x, po->grid_step.y, po->grid_step.theta,
                                po->error_extent, po->error_taper, po->min_overlap,
                                po->verdict_eta_max, po->verdict_margin_min, po->op.tolerance,
-                               po->op.oversampling, po->verdict_coincidence, po->verdict_margin_compact, po->verdict_contrast, 0, 0, 0};
+                               po->op.oversampling, po->verdict_coincidence, po->verdict_margin_compact, po->verdict_contrast, po->joint_coverage_min, 0, 0};
         h = sasnav_hash_doubles(h, pd, 31);
         /* the final stage's criterion and the joint misfit's settings (and
          * the contrast that also gates the coincidence rule); keys of

@@ -139,8 +139,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       tx_lag, default) or 'motion' (speed x 2 R / c at the
                       sub-interval's centre range R)
     --final C         the final stage's criterion: 'auto' (default: the joint
-                      misfit when the pings' relative yaw is small and the
-                      scene speckle-like, eta otherwise),
+                      misfit when the pings' relative yaw is small, the
+                      scene speckle-like and the grid covers half the beam's
+                      footprint, eta otherwise),
                       'eta' (the paper's) or 'joint' (one scene explains
                       both pings; docs/estimator.md, "A joint-misfit final
                       stage")

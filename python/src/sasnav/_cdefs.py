@@ -292,6 +292,7 @@ class PairOpts(Structure):  # estimator.h
         ("joint_contrast_max", c_double),
         ("joint_eta_ratio", c_double),
         ("verdict_contrast", c_double),
+        ("joint_coverage_min", c_double),
     ]
 
 
