@@ -44,7 +44,7 @@ static const char *help =
     "  pairs.csv           every pair estimate (motion error; its error vs the\n"
     "                      truth when known), its margin, whether it sits at a\n"
     "                      phase-centre coincidence, the contrast of p's image\n"
-    "                      (above 5: compact-scene rules), status and verdict\n"
+    "                      (above 4: compact-scene verdicts), status and verdict\n"
     "  trajectories.png    along/cross-track deviation from the mean of the K\n"
     "  correlation.csv     pairwise image correlations (navigated images)\n"
     "  siso_J.png, simo_J.png   images with the largest K's trajectory\n"

@@ -358,11 +358,13 @@ typedef struct {
     double contrast;           /* the intensity contrast (standard deviation
                                   over mean of |rho_p|^2 over the error
                                   window) of p's full-pixel reconstruction:
-                                  about 1 on speckle, above
-                                  opts.joint_contrast_max on the compact
-                                  scenes whose rules (search grid, margin,
-                                  coincidence) the estimate was judged by;
-                                  0 where no estimate was made (DPCA) */
+                                  about 1 on speckle; above
+                                  opts.verdict_contrast the verdict took
+                                  the compact-scene rules (margin,
+                                  coincidence), above joint_contrast_max
+                                  the search the full pixels and the final
+                                  stage eta's; 0 where no estimate was
+                                  made (DPCA) */
 } sasnav_pair_result;
 
 typedef struct sasnav_pair sasnav_pair;

@@ -491,7 +491,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     pairs.csv           every pair estimate (motion error; its error vs the
                         truth when known), its margin, whether it sits at a
                         phase-centre coincidence, the contrast of p's image
-                        (above 5: compact-scene rules), status and verdict
+                        (above 4: compact-scene verdicts), status and verdict
     trajectories.png    along/cross-track deviation from the mean of the K
     correlation.csv     pairwise image correlations (navigated images)
     siso_J.png, simo_J.png   images with the largest K's trajectory
