@@ -491,17 +491,19 @@ static void test_resume(void)
 
     /* Other options: no record applies. k; and options that change an
      * estimate or its verdict only in some cases (the final criterion, the
-     * joint misfit's contrast gate, which also gates the coincidence
-     * rule, the coincidence tolerance, the compact scenes' margin): a
-     * record made under others must not be taken, even where (as here,
-     * without a final stage) they would give the same. */
-    for (int v = 0; v < 5; v++) {
+     * joint misfit's contrast gate, the coincidence tolerance, the compact
+     * scenes' margin, the verdict's contrast gate, the joint misfit's
+     * coverage rule): a record made under others must not be taken, even
+     * where (as here, without a final stage) they would give the same. */
+    for (int v = 0; v < 7; v++) {
         sasnav_navigate_opts ov = o;
         if (v == 0) ov.pair.k = o.pair.coarse_k + 1;
         if (v == 1) ov.pair.final_criterion = SASNAV_FINAL_ETA;
         if (v == 2) ov.pair.joint_contrast_max = 3.0;
         if (v == 3) ov.pair.verdict_coincidence = 0.5 * o.pair.verdict_coincidence;
         if (v == 4) ov.pair.verdict_margin_compact = o.pair.verdict_margin_compact + 0.1;
+        if (v == 5) ov.pair.verdict_contrast = o.pair.verdict_contrast + 0.5;
+        if (v == 6) ov.pair.joint_coverage_min = o.pair.joint_coverage_min + 0.1;
         none = (record_log){0};
         ov.progress_user = &none;
         CHECK_OK(sasnav_navigate(run, &ov, &nav));

@@ -76,8 +76,12 @@ struct sasnav_pair {
     double pc_spacing;         /* phase-centre spacing of the channel layout
                                   (0: from the array's rx_u) */
     double footprint;          /* m, along-track footprint between the first
-                                  nulls of the widest element beam at the
-                                  grid's range (INFINITY: omnidirectional) */
+                                  nulls of the beam of the largest aperture
+                                  (Tx or Rx, the narrowest beam) at the
+                                  grid's range (INFINITY: apertures of at
+                                  most a wavelength); from the lengths
+                                  alone, whether or not the run's model
+                                  has beam patterns */
     size_t nd;
     sasnav_cfloat *data_p, *data_q;
     sasnav_pose nominal;

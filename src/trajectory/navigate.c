@@ -231,8 +231,8 @@ static uint64_t options_digest(const sasnav_run *run, const sasnav_navigate_opts
                                po->verdict_eta_max, po->verdict_margin_min, po->op.tolerance,
                                po->op.oversampling, po->verdict_coincidence, po->verdict_margin_compact, po->verdict_contrast, po->joint_coverage_min, 0, 0};
         h = sasnav_hash_doubles(h, pd, 31);
-        /* the final stage's criterion and the joint misfit's settings (and
-         * the contrast that also gates the coincidence rule); keys of
+        /* the final stage's criterion and the joint misfit's settings (the
+         * verdict's contrast gate and the coverage rule are in pd above); keys of
          * earlier versions, which left them out, were made with the
          * defaults and stay theirs */
         sasnav_pair_opts def;
