@@ -73,8 +73,8 @@ static const char *help =
     "                    with --virtual-array off unless given); compact\n"
     "                    scenes also need an eta margin of 1.25 for 'ok' (see\n"
     "                    'sasnav pair --help')\n"
-    "  --compact-contrast C  the contrast of p's image above which a pair's\n"
-    "                    scene is compact for its verdict (default 4; 'inf':\n"
+    "  --compact-contrast C  the contrast of p's image or q's above which a\n"
+    "                    pair's scene is compact for its verdict (default 4; 'inf':\n"
     "                    never; see 'sasnav pair --help')\n"
     "  --final C         each pair's final-stage criterion: auto (default), eta\n"
     "                    or joint (see 'sasnav pair --help')\n"
@@ -281,6 +281,7 @@ static void print_json(const char *input, const sasnav_navigation *nav)
                                 json_string(sasnav_final_criterion_name(np->result.final_criterion)));
             json_object_set_new(o, "search_grid", json_string(sasnav_search_grid_name(np->result.search_grid)));
             json_object_set_new(o, "contrast", json_real(np->result.contrast));
+            json_object_set_new(o, "contrast_q", json_real(np->result.contrast_q));
         }
         json_object_set_new(o, "candidates", candidates_json(&np->result));
         if (nav->aiding_used) {

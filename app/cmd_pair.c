@@ -68,10 +68,10 @@ static const char *help =
     "                    (its surge is not resolved there; default 0.5: all, 0 off;\n"
     "                    compact scenes also need an eta margin of 1.25 for\n"
     "                    'ok': docs/estimator.md, \"Verdict\")\n"
-    "  --compact-contrast C  the intensity contrast of p's image above which\n"
-    "                    the scene is compact for the verdict (default 4;\n"
+    "  --compact-contrast C  the intensity contrast of p's image or of q's above\n"
+    "                    which the scene is compact for the verdict (default 4;\n"
     "                    speckle about 1, simulated seabeds up to 3.9; 'inf':\n"
-    "                    never; reported as 'contrast' in --json)\n"
+    "                    never; reported as 'contrast', 'contrast_q' in --json)\n"
     "  --threads N       OpenMP threads\n"
     "  --gpu             the error evaluations on a CUDA GPU (builds configured\n"
     "                    with -DSASNAV_CUDA=ON; the same estimates to float\n"
@@ -308,6 +308,7 @@ int cmd_pair(int argc, char **argv)
         json_object_set_new(root, "joint_rejected", json_boolean(r0->joint_rejected));
         json_object_set_new(root, "search_grid", json_string(sasnav_search_grid_name(r0->search_grid)));
         json_object_set_new(root, "contrast", json_real(r0->contrast));
+        json_object_set_new(root, "contrast_q", json_real(r0->contrast_q));
         json_object_set_new(root, "overlap", json_real(r0->overlap));
         json_object_set_new(root, "ambiguity", json_real(r0->ambiguity));
         json_object_set_new(root, "evaluations", json_integer(r0->evaluations));
@@ -398,13 +399,13 @@ int cmd_pair(int argc, char **argv)
                r->evaluations_eta, r->applications, r->seconds,
                r->status == SASNAV_OK ? "converged" : sasnav_strerror(r->status));
         printf("time per stage: global %.2f s (%ld applications), zeta %.2f s (%ld), eta %.2f s (%ld), "
-               "final %.2f s (%ld, %d evaluations, criterion %s); search grid %s; contrast %.2f\n",
+               "final %.2f s (%ld, %d evaluations, criterion %s); search grid %s; contrast %.2f (q %.2f)\n",
                r->seconds_global, r->applications_global, r->seconds_zeta, r->applications_zeta,
                r->seconds_eta, r->applications_eta, r->seconds_final, r->applications_final,
                r->evaluations_final,
                r->joint_rejected ? "eta, the joint misfit's estimate rejected"
                                  : sasnav_final_criterion_name(r->final_criterion),
-               sasnav_search_grid_name(r->search_grid), r->contrast);
+               sasnav_search_grid_name(r->search_grid), r->contrast, r->contrast_q);
         for (int kc = 0; kc < r->n_candidates; kc++) {
             const sasnav_pair_candidate *c = &r->candidates[kc];
             char scan_s[32];

@@ -15,14 +15,18 @@
  *
  * usage: bench_bias [--seeds S0 N] [--snr DB|inf] [--models fixed,lags,yaw,full]
  *                   [--range-extent M] [--cross-extent M] [--error-extent M]
- *                   [--k K] [--i I] [--scene-range Y0,Y1] [--threads T] [--quiet]
- *                   [--gpu]
+ *                   [--k K] [--i I] [--scene-range Y0,Y1] [--disc-amplitude A]
+ *                   [--threads T] [--quiet] [--gpu]
  *
  * --scene-range puts the ripple seabed between ranges Y0 and Y1 (the
  * preset's 9-11 m by default) and widens the recorded swath to hold it:
  * with the grid's --range-extent it measures how the criterion's yaw
  * error depends on the range span of seabed the grid sees
  * (docs/estimator.md, "The yaw floor is the seabed's range span").
+ *
+ * --disc-amplitude sets the bright disc's rms amplitude (the preset's 4;
+ * 16 puts it 24 dB above the ripple seabed: docs/validation.md, "A bright
+ * feature at the beam's edge").
  *
  * --gpu: the error evaluations on a CUDA GPU (builds with -DSASNAV_CUDA=ON;
  * the CPU's estimates to float rounding, docs/estimator.md "GPU").
@@ -117,7 +121,8 @@ static void usage(void)
 {
     fprintf(stderr, "usage: bench_bias [--seeds S0 N] [--snr DB|inf] [--models fixed,lags,yaw,full]\n"
                     "                  [--range-extent M] [--cross-extent M] [--error-extent M]\n"
-                    "                  [--k K] [--i I] [--scene-range Y0,Y1] [--threads T] [--quiet] [--gpu]\n"
+                    "                  [--k K] [--i I] [--scene-range Y0,Y1] [--disc-amplitude A]\n"
+                    "                  [--threads T] [--quiet] [--gpu]\n"
                     "                  [--final auto|eta|joint] [--joint-k K] [--joint-mu M]\n");
 }
 
@@ -126,7 +131,7 @@ int main(int argc, char **argv)
     long s0 = 101, ns = 3;
     double snr = 30.0;
     int use[N_MODELS] = {1, 1, 1, 1}, threads = 0, quiet = 0;
-    double scene_y0 = NAN, scene_y1 = NAN;
+    double scene_y0 = NAN, scene_y1 = NAN, disc_amplitude = NAN;
     sasnav_pair_opts po;
     sasnav_pair_default_opts(&po);
     for (int a = 1; a < argc; a++) {
@@ -144,6 +149,12 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[a], "--scene-range") && a + 1 < argc) {
             if (sscanf(argv[++a], "%lf,%lf", &scene_y0, &scene_y1) != 2 || !(scene_y1 > scene_y0) ||
                 !(scene_y0 > 1.0)) {
+                usage();
+                return 2;
+            }
+        } else if (!strcmp(argv[a], "--disc-amplitude") && a + 1 < argc) {
+            disc_amplitude = atof(argv[++a]);
+            if (!(disc_amplitude >= 0)) {
                 usage();
                 return 2;
             }
@@ -183,8 +194,9 @@ int main(int argc, char **argv)
            "cross extent %g m (0 = auto), error extent %g m (0 = the grid)\n",
            snr, s0, s0 + ns - 1, po.k, po.i, po.range_extent, po.cross_extent, po.error_extent);
     if (isfinite(scene_y0)) printf("seabed between %g and %g m\n", scene_y0, scene_y1);
+    if (isfinite(disc_amplitude)) printf("disc amplitude %g\n", disc_amplitude);
     for (long s = s0; s < s0 + ns; s++) {
-        sasnav_run *run = bench_trajectory_run_scene(s, snr, 0, scene_y0, scene_y1);
+        sasnav_run *run = bench_trajectory_run_scene(s, snr, 0, scene_y0, scene_y1, disc_amplitude);
         if (!run) return 1;
         int np = run->n_pings - 1;
         pairs_per_run = np;

@@ -35,10 +35,11 @@ static inline double percentile(double *v, int n, double pc)
  * 9-11 m where y0 is not finite) and the recorded swath widened to hold
  * it with the preset's margins (0.2 m before, 0.6 m after). */
 static inline sasnav_run *bench_trajectory_run_scene(long s, double snr, int aiding, double y0,
-                                                     double y1)
+                                                     double y1, double disc_amplitude)
 {
     sasnav_scenario sc;
     sasnav_scenario_preset("paper-trajectory", &sc);
+    if (isfinite(disc_amplitude)) sc.ripples.disc_amplitude = disc_amplitude;
     if (isfinite(y0) && isfinite(y1)) {
         sc.ripples.y_min = y0;
         sc.ripples.y_max = y1;
@@ -63,7 +64,7 @@ static inline sasnav_run *bench_trajectory_run_scene(long s, double snr, int aid
 
 static inline sasnav_run *bench_trajectory_run(long s, double snr, int aiding)
 {
-    return bench_trajectory_run_scene(s, snr, aiding, NAN, NAN);
+    return bench_trajectory_run_scene(s, snr, aiding, NAN, NAN, NAN);
 }
 
 /* Consumes `--seeds S0 N` or `--snr DB|inf` at argv[*a] (advancing *a);

@@ -79,7 +79,8 @@ static void check_recovery(sasnav_pose truth, uint64_t seed)
         /* The stage accounting covers the whole estimate: only the closing
          * evaluation at the estimate (its overlap), when not kept from the
          * final stage, lies outside the stages: one level-2 evaluation,
-         * 2k + 4i(2k + 1) applications. */
+         * 2k + 4i(2k + 1) applications. (The CGLS of q's contrast at the
+         * estimate counts with the final stage.) */
         const sasnav_pair_opts *po = sasnav_pair_options(pair);
         long staged = r.applications_global + r.applications_zeta + r.applications_eta +
                       r.applications_final;
@@ -272,7 +273,8 @@ static void check_verdict(void)
          * opts.verdict_contrast, 4). */
         double d = 0.5 * (run->array.rx_u[1] - run->array.rx_u[0]);
         double u = r.displacement.x / d;
-        int expect = pair_contrast(pair) > po.verdict_contrast && fabs(nearbyint(u)) < run->array.n_rx &&
+        double cmax = r.contrast_q > r.contrast ? r.contrast_q : r.contrast;
+        int expect = cmax > po.verdict_contrast && fabs(nearbyint(u)) < run->array.n_rx &&
                      fabs(u - nearbyint(u)) < po.verdict_coincidence;
         printf("point target: contrast %.2f, displacement %.3f spacings, coincidence %d\n",
                pair_contrast(pair), u, r.coincidence);
@@ -332,6 +334,50 @@ static void check_verdict(void)
         }
         sasnav_pair_destroy(pair);
     }
+    /* The verdict's gate reads q's image too (opts.verdict_contrast on the
+     * larger of contrast and contrast_q): the point target's pair in both
+     * orders, from the truth, with the gate set between the two images'
+     * contrasts. In the order where q's image is the more contrasted
+     * (asserted to exist: the two pings see the reflector at different
+     * angles) p's contrast alone is under the gate, and the compact rules
+     * must still apply (a coincidence, "ambiguous"); with the gate above
+     * both they do not ("ok": estimate_from has no margin to fail). */
+    int q_higher = 0;
+    for (int order = 0; order < 2; order++) {
+        int a = order ? 9 : 8, b = order ? 8 : 9;
+        sasnav_pose dt = sasnav_ping_displacement(&run->truth[a], &run->truth[b]),
+                    dn = sasnav_ping_displacement(&run->nav[a], &run->nav[b]);
+        sasnav_pose start = {dt.x - dn.x, dt.y - dn.y, dt.theta - dn.theta};
+        double c = 0, cq = 0;
+        for (int t = 0; t < 3; t++) {
+            sasnav_pair_opts pc = po;
+            if (t == 1) pc.verdict_contrast = 0.5 * (c + cq);
+            if (t == 2) pc.verdict_contrast = 1.01 * (c > cq ? c : cq);
+            pair = NULL;
+            CHECK_OK(sasnav_pair_create(&run->sys, &run->array, &run->win, &pc, &pair));
+            if (!pair) continue;
+            CHECK_OK(sasnav_pair_set_data(pair, sasnav_run_ping(run, a), sasnav_run_ping(run, b), dn));
+            CHECK_OK(sasnav_pair_estimate_from(pair, start, &r));
+            sasnav_pair_destroy(pair);
+            if (t == 0) {
+                c = r.contrast;
+                cq = r.contrast_q;
+                printf("point target, pings %d -> %d: contrast %.2f, q's %.2f\n", a, b, c, cq);
+                CHECK(cq > po.joint_contrast_max && fabs(cq - c) > 1e-3 * c, "pings %d -> %d: contrasts %.3f, %.3f",
+                      a, b, c, cq);
+                q_higher += cq > c;
+                continue;
+            }
+            int flag = t == 1;
+            printf("  gate %.2f: verdict %s, coincidence %d\n", pc.verdict_contrast, sasnav_verdict_name(r.verdict),
+                   r.coincidence);
+            CHECK(r.contrast == c && r.contrast_q == cq, "pings %d -> %d: contrasts moved with the gate", a, b);
+            CHECK(r.coincidence == flag && r.verdict == (flag ? SASNAV_VERDICT_AMBIGUOUS : SASNAV_VERDICT_OK),
+                  "pings %d -> %d, gate %.2f between %.2f and %.2f: coincidence %d, verdict %s", a, b,
+                  pc.verdict_contrast, c, cq, r.coincidence, sasnav_verdict_name(r.verdict));
+        }
+    }
+    CHECK(q_higher == 1, "q's image the more contrasted in %d of the 2 orders", q_higher);
     /* The same pair given channel by channel (set_data_channels, each
      * channel with the EPCA geometry): the rule then reads each channel's
      * phase centres. With q's channels placed a quarter spacing further
@@ -366,7 +412,8 @@ static void check_verdict(void)
         /* expected from the displacement and the layouts above: q's phase
          * centres at (l + t / 4) d + x, p's at l d (common offset aside) */
         double u = r.displacement.x / d + 0.25 * t, m = nearbyint(u);
-        int expect = pair_contrast(pair) > pc.verdict_contrast && fabs(m) < n && fabs(u - m) < 0.1;
+        double cmax = r.contrast_q > r.contrast ? r.contrast_q : r.contrast;
+        int expect = cmax > pc.verdict_contrast && fabs(m) < n && fabs(u - m) < 0.1;
         printf("point target by channels, q moved %.2f spacing: displacement %.3f spacings, coincidence %d\n",
                0.25 * t, r.displacement.x / d, r.coincidence);
         CHECK(r.coincidence == expect, "by channels, q moved %.2f: coincidence %d, expected %d", 0.25 * t,

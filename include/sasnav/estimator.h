@@ -365,6 +365,13 @@ typedef struct {
                                   the search the full pixels and the final
                                   stage eta's; 0 where no estimate was
                                   made (DPCA) */
+    double contrast_q;         /* the same of q's reconstruction placed at
+                                  the estimate; the verdict takes the
+                                  compact-scene rules where either image's
+                                  contrast is above opts.verdict_contrast
+                                  (a bright feature that q's beam sees and
+                                  p's hardly: docs/validation.md); 0 where
+                                  no estimate was made */
 } sasnav_pair_result;
 
 typedef struct sasnav_pair sasnav_pair;

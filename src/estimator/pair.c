@@ -178,6 +178,23 @@ static pair_level *ops_owner(sasnav_pair *pr, int level)
  * early stop of CGLS does fewer. */
 static long cgls_cost(int k) { return 2L * k; }
 
+/* The contrast of an image's intensity |rho|^2 over the level's error
+ * window (standard deviation over mean): about 1 for fully developed
+ * speckle, 1.7-3.9 on the simulated seabeds, 6-13 on the tank's four
+ * reflectors (docs/estimator.md, "A joint-misfit final stage"). */
+static double window_contrast(const pair_level *lv, const sasnav_cfloat *rho)
+{
+    double s1 = 0, s2 = 0, w = 0;
+    for (size_t j = 0; j < lv->np; j++) {
+        double iv = (double)crealf(rho[j]) * crealf(rho[j]) + (double)cimagf(rho[j]) * cimagf(rho[j]);
+        s1 += lv->window[j] * iv;
+        s2 += lv->window[j] * iv * iv;
+        w += lv->window[j];
+    }
+    double mean = w > 0 ? s1 / w : 0, var = w > 0 ? s2 / w - mean * mean : 0;
+    return mean > 0 && var > 0 ? sqrt(var) / mean : 0.0;
+}
+
 /* p's reconstruction on the level's grid, with the level's iterations. */
 static int level_rho_p(sasnav_pair *pr, pair_level *lv)
 {
@@ -193,20 +210,7 @@ static int level_rho_p(sasnav_pair *pr, pair_level *lv)
     pr->applications += cgls_cost(lv->k);
     if (rc) return rc;
     lv->rho_p_norm = nrm2(lv->rho_p, lv->np);
-    /* The contrast of p's intensity |rho_p|^2 over the error window
-     * (standard deviation over mean): about 1 for fully developed speckle,
-     * 1.7-3.9 on the simulated seabeds, 6-13 on the tank's four
-     * reflectors (docs/estimator.md, "A joint-misfit final stage"). */
-    double s1 = 0, s2 = 0, w = 0;
-    for (size_t j = 0; j < lv->np; j++) {
-        double iv = (double)crealf(lv->rho_p[j]) * crealf(lv->rho_p[j]) +
-                    (double)cimagf(lv->rho_p[j]) * cimagf(lv->rho_p[j]);
-        s1 += lv->window[j] * iv;
-        s2 += lv->window[j] * iv * iv;
-        w += lv->window[j];
-    }
-    double mean = w > 0 ? s1 / w : 0, var = w > 0 ? s2 / w - mean * mean : 0;
-    lv->contrast = mean > 0 && var > 0 ? sqrt(var) / mean : 0.0;
+    lv->contrast = window_contrast(lv, lv->rho_p);
     if (!(lv->rho_p_norm > 0))
         return sasnav_set_error(SASNAV_ERR_NO_OVERLAP,
                                 "ping p sees nothing on the estimation grid (range %g m): "
@@ -1452,6 +1456,26 @@ size_t pair_joint_len(const sasnav_pair *pr)
 }
 
 double pair_contrast(const sasnav_pair *pr) { return pr->level[1].contrast; }
+
+int pair_contrast_q(sasnav_pair *pr, sasnav_pose error, double *contrast)
+{
+    pair_level *lv = &pr->level[1];
+    sasnav_pose was = lv->q_sigma;
+    int placed = lv->q_placed;
+    sasnav_cfloat *rho = malloc(sizeof(sasnav_cfloat) * lv->np);
+    if (!rho) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for the estimator");
+    int rc = place_q(pr, 1, error);
+    if (!rc) {
+        sasnav_cgls_opts co = {lv->k, pr->opts.tikhonov};
+        rc = sasnav_cgls(lv->op_q, pr->data_q, &co, rho, lv->cgls_work);
+        pr->applications += cgls_cost(lv->k);
+    }
+    if (!rc) *contrast = window_contrast(lv, rho);
+    free(rho);
+    /* q's operator back where the estimate's last evaluation left it */
+    if (!rc && placed) rc = place_q(pr, 1, was);
+    return rc;
+}
 
 int pair_joint_tikhonov(sasnav_pair *pr, sasnav_pose error, double *lam)
 {

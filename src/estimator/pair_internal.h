@@ -138,6 +138,10 @@ size_t pair_joint_len(const sasnav_pair *pr);
  * the error window) of p's reconstruction at level 1: ~1 for speckle, far
  * above for a few bright points. */
 double pair_contrast(const sasnav_pair *pr);
+/* The same contrast of q's reconstruction (level 1, its iterations) with
+ * q placed at the motion error `error` (one CGLS: 2 k applications); q's
+ * operator is placed back where it was. */
+int pair_contrast_q(sasnav_pair *pr, sasnav_pose error, double *contrast);
 int pair_joint_tikhonov(sasnav_pair *pr, sasnav_pose error, double *lam);
 int pair_eval_joint(sasnav_pair *pr, sasnav_pose error, double lam, sasnav_cfloat *r, double *f);
 

@@ -1135,21 +1135,25 @@ static void phase_centres(const sasnav_pair *pr, int q, double *x)
  * between the pings is left out: it moves a phase centre on the array's
  * axis, x from the centroid, by x yaw^2 / 2 along track (20 microns at
  * 0.4 m and 1e-2 rad). */
-/* Whether the verdict takes the compact-scene rules: p's intensity
- * contrast above opts.verdict_contrast (lower than joint_contrast_max,
- * which picks the search grid and final stage: tank scenes just under
- * that gate slipped with "ok" verdicts; docs/validation.md, "Scenes just
- * under the compact gate"). */
-static int compact_verdict(const sasnav_pair *pr)
+/* Whether the verdict takes the compact-scene rules: the intensity
+ * contrast of p's image or of q's (at the estimate) above
+ * opts.verdict_contrast (lower than joint_contrast_max, which picks the
+ * search grid and final stage from p's alone: tank scenes just under that
+ * gate slipped with "ok" verdicts, docs/validation.md "Scenes just under
+ * the compact gate"; and pairs whose q alone sees a bright feature
+ * slipped with p's contrast under it, "A bright feature entering the
+ * beam"). */
+static int compact_verdict(const sasnav_pair *pr, const sasnav_pair_result *res)
 {
-    return pair_contrast(pr) > sasnav_pair_options(pr)->verdict_contrast;
+    double c = res->contrast_q > res->contrast ? res->contrast_q : res->contrast;
+    return c > sasnav_pair_options(pr)->verdict_contrast;
 }
 
 static int at_coincidence(const sasnav_pair *pr, const sasnav_pair_result *res, double pc_spacing)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
     if (!(o->verdict_coincidence > 0) || !(pc_spacing > 0)) return 0;
-    if (!compact_verdict(pr)) return 0;
+    if (!compact_verdict(pr, res)) return 0;
     double dx = res->displacement.x, tol = o->verdict_coincidence * pc_spacing;
     if (!isfinite(dx)) return 0;
     double xp[SASNAV_MAX_RX], xq[SASNAV_MAX_RX];
@@ -1164,11 +1168,11 @@ static int at_coincidence(const sasnav_pair *pr, const sasnav_pair_result *res, 
 /* The margin an "ok" estimate needs: verdict_margin_min, and on a compact
  * scene (compact_verdict, which also gates the coincidence rule) at least
  * verdict_margin_compact (docs/validation.md, "Flagged pairs"). */
-static double margin_min(const sasnav_pair *pr)
+static double margin_min(const sasnav_pair *pr, const sasnav_pair_result *res)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
     double m = o->verdict_margin_min;
-    if (compact_verdict(pr) && o->verdict_margin_compact > m) m = o->verdict_margin_compact;
+    if (compact_verdict(pr, res) && o->verdict_margin_compact > m) m = o->verdict_margin_compact;
     return m;
 }
 
@@ -1180,7 +1184,7 @@ static void judge(const sasnav_pair *pr, sasnav_pair_result *res, int converged,
     res->coincidence = at_coincidence(pr, res, pc_spacing);
     if (!(res->overlap >= o->min_overlap)) res->verdict = SASNAV_VERDICT_NO_OVERLAP;
     else if (!converged || !(res->eta <= o->verdict_eta_max)) res->verdict = SASNAV_VERDICT_FAILED;
-    else if (!(res->margin >= margin_min(pr)) || res->coincidence)
+    else if (!(res->margin >= margin_min(pr, res)) || res->coincidence)
         res->verdict = SASNAV_VERDICT_AMBIGUOUS;
     else res->verdict = SASNAV_VERDICT_OK;
 }
@@ -1220,7 +1224,12 @@ static int finish(sasnav_pair *pr, double pc_spacing, refine_out *r, refine_out 
     /* The overlap where the final stage last evaluated (kept: no work) */
     rc = sasnav_pair_eval(pr, final_stage ? r->measured : r->error, final_stage ? PAIR_LEVELS - 1 : 1, 0,
                           NULL, NULL, &res->overlap);
+    /* q's contrast at the estimate, for the verdict (counted with the
+     * final stage: one CGLS) */
+    long apps_q = pr->applications;
+    if (!rc) rc = pair_contrast_q(pr, res->error, &res->contrast_q);
     if (rc) return rc;
+    res->applications_final += pr->applications - apps_q;
     res->evaluations = 1 + nglob + res->evaluations_zeta + res->evaluations_eta + 1;
     res->applications = pr->applications - apps0;
     res->seconds = sasnav_now_seconds() - t0;

@@ -154,10 +154,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       (its surge is not resolved there; default 0.5: all, 0 off;
                       compact scenes also need an eta margin of 1.25 for
                       'ok': docs/estimator.md, "Verdict")
-    --compact-contrast C  the intensity contrast of p's image above which
-                      the scene is compact for the verdict (default 4;
+    --compact-contrast C  the intensity contrast of p's image or of q's above
+                      which the scene is compact for the verdict (default 4;
                       speckle about 1, simulated seabeds up to 3.9; 'inf':
-                      never; reported as 'contrast' in --json)
+                      never; reported as 'contrast', 'contrast_q' in --json)
     --threads N       OpenMP threads
     --gpu             the error evaluations on a CUDA GPU (builds configured
                       with -DSASNAV_CUDA=ON; the same estimates to float
@@ -302,8 +302,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       with --virtual-array off unless given); compact
                       scenes also need an eta margin of 1.25 for 'ok' (see
                       'sasnav pair --help')
-    --compact-contrast C  the contrast of p's image above which a pair's
-                      scene is compact for its verdict (default 4; 'inf':
+    --compact-contrast C  the contrast of p's image or q's above which a
+                      pair's scene is compact for its verdict (default 4; 'inf':
                       never; see 'sasnav pair --help')
     --final C         each pair's final-stage criterion: auto (default), eta
                       or joint (see 'sasnav pair --help')
@@ -490,8 +490,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     trajectories.csv    ping, K, along-track, cross-track, yaw (aligned)
     pairs.csv           every pair estimate (motion error; its error vs the
                         truth when known), its margin, whether it sits at a
-                        phase-centre coincidence, the contrast of p's image
-                        (above 4: compact-scene verdicts), status and verdict
+                        phase-centre coincidence, the contrasts of p's and
+                        q's images (either above 4: compact-scene verdicts),
+                        status and verdict
     trajectories.png    along/cross-track deviation from the mean of the K
     correlation.csv     pairwise image correlations (navigated images)
     siso_J.png, simo_J.png   images with the largest K's trajectory

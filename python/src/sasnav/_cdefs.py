@@ -345,6 +345,7 @@ class PairResult(Structure):  # estimator.h
         ("search_grid", c_int),  # sasnav_search_grid
         ("coincidence", c_int),
         ("contrast", c_double),
+        ("contrast_q", c_double),
     ]
 
 

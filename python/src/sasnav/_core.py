@@ -921,9 +921,10 @@ class PairEstimate:
     "ambiguous", "failed", "no_overlap" or (DPCA) "unchecked"; margin (inf: no other
     candidate); coincidence: True where the estimate sits at a phase-centre
     coincidence on a compact scene, where its surge is not resolved (the
-    verdict is then "ambiguous" at best); contrast: the intensity contrast of
-    p's reconstruction that decided between the speckle and the compact-scene
-    rules (0 for DPCA); candidates: list of Candidate; status: "ok" or the
+    verdict is then "ambiguous" at best); contrast, contrast_q: the intensity
+    contrasts of p's reconstruction and of q's at the estimate, the larger of
+    which decided between the speckle and the compact-scene rules (0 for
+    DPCA); candidates: list of Candidate; status: "ok" or the
     estimator's status text; result: the C struct (every field)."""
 
     p: int
@@ -950,6 +951,7 @@ class PairEstimate:
     search_grid: str
     coincidence: bool
     contrast: float
+    contrast_q: float
     result: C.PairResult = field(repr=False)
 
 
@@ -982,6 +984,7 @@ def _estimate_from_c(r, p, q, nominal, truth):
                         _search_grid_name(r),
                         bool(r.coincidence),
                         r.contrast,
+                        r.contrast_q,
                         C.PairResult.from_buffer_copy(r))
 
 
