@@ -19,8 +19,10 @@ margin alone: what the verdict was before it), recomputed from the
 tolerances and compact-scene margins (`--grid`; docs/validation.md, "A
 wider tolerance and a compact scene's margin"), and for other contrast
 gates of the compact-scene rules (`--gate`: the gate the tables were made
-with; docs/validation.md, "Scenes just under the compact gate"). Python's
-standard library only.
+with; docs/validation.md, "Scenes just under the compact gate"), on p's
+image's contrast and, for tables with the `contrast_q` column, on the
+larger of p's and q's (the verdict since stop 55, "A bright feature
+entering the beam"). Python's standard library only.
 """
 import argparse
 import csv
@@ -119,7 +121,7 @@ def grid(rows, slipped, tolerance, gate):
         return abs(u - round(u))
 
     def compact(r):  # tables of builds before the contrast column: every tank pair was compact
-        return "contrast" not in r or float(r["contrast"]) > gate
+        return "contrast" not in r or verdict_contrast(r) > gate
     miss = sum(1 for r in rows if (compact(r) and dist(r) < tolerance) != (r["coincidence"] == "1"))
     print(f"verdicts recomputed (\"ok\" / slipped among them; {miss} of {len(rows)} pairs disagree "
           f"with the coincidence column at tolerance {tolerance}):")
@@ -132,6 +134,16 @@ def grid(rows, slipped, tolerance, gate):
             ok = [r for r in rows if r["status"] == "ok" and float(r["margin"]) >= m and dist(r) >= tol]
             cells.append(f"{len(ok)} / {sum(1 for r in ok if id(r) in slip_ids)}")
         print(f"| {tol:.2f} | " + " | ".join(cells) + " |")
+
+
+def verdict_contrast(r, with_q=True):
+    """The contrast the verdict's gate reads: p's image's, and since stop 55
+    the larger of it and q's (`contrast_q`, in tables of builds that have
+    it)."""
+    c = float(r["contrast"])
+    if with_q and r.get("contrast_q"):
+        c = max(c, float(r["contrast_q"]))
+    return c
 
 
 def gates(rows, slipped):
@@ -147,15 +159,21 @@ def gates(rows, slipped):
     sc = sorted(float(r["contrast"]) for r in slipped)
     print(f"contrast of p's image: min {c[0]:.2f}, median {quantile(c, 0.5):.2f}, max {c[-1]:.2f}"
           + (f"; of the slipped pairs {sc[0]:.2f} .. {sc[-1]:.2f}" if sc else ""))
-    print("| compact-verdict gate | \"ok\" pairs | slipped pairs passed as \"ok\" (contrast) |")
-    print("|---|---|---|")
+    has_q = bool(rows[0].get("contrast_q"))
+    print("| compact-verdict gate | \"ok\" pairs | slipped pairs passed as \"ok\" (contrast) |"
+          + (" the gate on p's or q's: \"ok\" | slipped \"ok\" |" if has_q else ""))
+    print("|---|---|---|" + ("---|---|" if has_q else ""))
     slip_ids = {id(r) for r in slipped}
     for g in GRID_GATE:
-        ok = [r for r in rows if r["verdict"] not in ("failed", "no_overlap") and
-              float(r["contrast"]) <= g and float(r["margin"]) >= MARGIN_MIN]
-        bad = [r for r in ok if id(r) in slip_ids]
-        print(f"| {g:.2f} | {len(ok)} | {len(bad)}"
-              + (" (" + ", ".join(f"{float(r['contrast']):.2f}" for r in bad) + ")" if bad else "") + " |")
+        cells = []
+        for with_q in ([False, True] if has_q else [False]):
+            ok = [r for r in rows if r["verdict"] not in ("failed", "no_overlap") and
+                  verdict_contrast(r, with_q) <= g and float(r["margin"]) >= MARGIN_MIN]
+            bad = [r for r in ok if id(r) in slip_ids]
+            cells.append(f"{len(ok)} | {len(bad)}"
+                         + (" (" + ", ".join(f"{verdict_contrast(r, with_q):.2f}" for r in bad) + ")"
+                            if bad else ""))
+        print(f"| {g:.2f} | " + " | ".join(cells) + " |")
 
 
 def main():

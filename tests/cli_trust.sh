@@ -115,15 +115,15 @@ EOF
 grep -q "warning: pair 0-1 is ambiguous" "$T/pnav.err" ||
     fail "no warning for the ambiguous pair 0-1: $(cat "$T/pnav.err")"
 grep -q "pairs flagged" "$T/pnav.txt" || fail "the text summary lacks the flagged count"
-# Each pair reports the contrast of p's image that chose the verdict's
-# rules: the point target is compact (above the default gate, 4), so a pair
-# at a coincidence there is never "ok".
+# Each pair reports the contrasts of p's image and of q's (the larger
+# chose the verdict's rules): the point target is compact in both (above
+# the default gate, 4), so a pair at a coincidence there is never "ok".
 "$CLI" navigate "$T/point.h5" --k 2 --i 1 --range-extent 0.6 --json -o "$T/pnavj.h5" > "$T/pnav.json" \
     2> /dev/null || fail "navigate point --json"
 python3 - "$T/pnav.json" <<'EOF' || fail "point target: contrast in navigate --json"
 import json, sys
 for p in json.load(open(sys.argv[1]))["pairs"]:
-    assert p["contrast"] > 4, p["contrast"]
+    assert p["contrast"] > 4 and p["contrast_q"] > 4, (p["contrast"], p["contrast_q"])
     assert not (p["coincidence"] and p["status"] == "ok"), p
 EOF
 

@@ -145,7 +145,8 @@ typedef struct {
                                  the chosen one's below which the estimate
                                  is "ambiguous" (default 1.15) */
     double verdict_coincidence;/* on compact scenes (the intensity contrast of
-                                 p's reconstruction above verdict_contrast)
+                                 p's or q's reconstruction above
+                                 verdict_contrast)
                                  an estimate whose along-track displacement
                                  lies within this fraction of the
                                  phase-centre spacing of a multiple of it
@@ -203,7 +204,10 @@ typedef struct {
     double verdict_contrast;  /* the verdict's compact-scene rules
                               (verdict_margin_compact, verdict_coincidence)
                               apply where the intensity contrast of p's
-                              reconstruction exceeds this (default 4: the
+                              reconstruction, or of q's at the estimate
+                              (result.contrast_q; since a bright feature
+                              that q's beam sees and p's hardly pulled
+                              pairs with "ok" verdicts), exceeds this (default 4: the
                               simulated seabeds reach 3.9 where a bright
                               patch fills the beam, and tank scenes of
                               contrast 4.6-5.0, under joint_contrast_max,

@@ -47,8 +47,10 @@ def test_estimate_pair_paper(paper_pair):
     # a speckle-like seabed (contrast ~2, below joint_contrast_max): the
     # automatic search grid is the coarse one
     assert est.search_grid == "coarse"
-    # nor is the coincidence rule's business there (a compact-scene rule)
+    # nor is the coincidence rule's business there (a compact-scene rule):
+    # both images are speckle-like, under the verdict's gate (4)
     assert est.coincidence is False
+    assert 0.5 < est.contrast < 4 and 0.5 < est.contrast_q < 4, (est.contrast, est.contrast_q)
     assert est.candidates[est.chosen].chosen
     assert len(est.candidates) >= 2
     # displacement = nominal + error
