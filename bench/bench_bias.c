@@ -26,7 +26,7 @@
  *
  * --disc-amplitude sets the bright disc's rms amplitude (the preset's 4;
  * 16 puts it 24 dB above the ripple seabed: docs/validation.md, "A bright
- * feature at the beam's edge").
+ * feature entering the beam").
  *
  * --gpu: the error evaluations on a CUDA GPU (builds with -DSASNAV_CUDA=ON;
  * the CPU's estimates to float rounding, docs/estimator.md "GPU").
@@ -154,7 +154,7 @@ int main(int argc, char **argv)
             }
         } else if (!strcmp(argv[a], "--disc-amplitude") && a + 1 < argc) {
             disc_amplitude = atof(argv[++a]);
-            if (!(disc_amplitude >= 0)) {
+            if (!(disc_amplitude >= 0) || !isfinite(disc_amplitude)) {
                 usage();
                 return 2;
             }

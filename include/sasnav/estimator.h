@@ -365,7 +365,8 @@ typedef struct {
                                   about 1 on speckle; above
                                   opts.verdict_contrast the verdict took
                                   the compact-scene rules (margin,
-                                  coincidence), above joint_contrast_max
+                                  coincidence; so did it where
+                                  contrast_q is), above joint_contrast_max
                                   the search the full pixels and the final
                                   stage eta's; 0 where no estimate was
                                   made (DPCA) */

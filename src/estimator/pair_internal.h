@@ -140,7 +140,8 @@ size_t pair_joint_len(const sasnav_pair *pr);
 double pair_contrast(const sasnav_pair *pr);
 /* The same contrast of q's reconstruction (level 1, its iterations) with
  * q placed at the motion error `error` (one CGLS: 2 k applications); q's
- * operator is placed back where it was. */
+ * operator is placed back where it was (left at `error` if it had not
+ * been placed). */
 int pair_contrast_q(sasnav_pair *pr, sasnav_pose error, double *contrast);
 int pair_joint_tikhonov(sasnav_pair *pr, sasnav_pose error, double *lam);
 int pair_eval_joint(sasnav_pair *pr, sasnav_pose error, double lam, sasnav_cfloat *r, double *f);

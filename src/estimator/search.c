@@ -1125,7 +1125,7 @@ static void phase_centres(const sasnav_pair *pr, int q, double *x)
  * of q lies within opts.verdict_coincidence phase-centre spacings of one of
  * p's (on a uniform array: the displacement within that tolerance of a
  * multiple of the spacing shorter than the array; disjoint apertures share
- * none), on a compact scene (p's intensity contrast above
+ * none), on a compact scene (p's or q's intensity contrast above
  * verdict_contrast, compact_verdict below): there the
  * criterion is drawn to the coincidence from up to about 0.4 spacing away,
  * so the surge it reports is not a measurement (docs/estimator.md, "Known
