@@ -52,6 +52,8 @@ int cli_parse_doubles(const char *text, int n, double *out);
 /* Parses a finite double / an int in [lo, hi]. Returns 0 on success. */
 int cli_parse_double(const char *text, double *out);
 int cli_parse_int(const char *text, long lo, long hi, long *out);
+/* Parses a finite double >= 0, or "inf" (INFINITY). Returns 0 on success. */
+int cli_parse_nonneg_or_inf(const char *text, double *out);
 /* Parses X0,X1,NX,Y0,Y1,NY into a grid. */
 int cli_parse_grid(const char *text, sasnav_grid *grid);
 

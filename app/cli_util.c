@@ -129,6 +129,15 @@ int cli_parse_double(const char *text, double *out)
     return 0;
 }
 
+int cli_parse_nonneg_or_inf(const char *text, double *out)
+{
+    double v;
+    if (text && !strcmp(text, "inf")) v = INFINITY;
+    else if (cli_parse_double(text, &v) || !(v >= 0)) return -1;
+    *out = v;
+    return 0;
+}
+
 int cli_parse_int(const char *text, long lo, long hi, long *out)
 {
     if (!text || !*text) return -1;

@@ -590,8 +590,7 @@ int cmd_navigate(int argc, char **argv)
                 return cli_usage("navigate", "--coincidence needs a fraction of the phase-centre spacing in [0, 0.5]");
             break;
         case 'Q':
-            if (!strcmp(optarg, "inf")) no.pair.verdict_contrast = INFINITY;
-            else if (cli_parse_double(optarg, &no.pair.verdict_contrast) || !(no.pair.verdict_contrast >= 0))
+            if (cli_parse_nonneg_or_inf(optarg, &no.pair.verdict_contrast))
                 return cli_usage("navigate", "--compact-contrast needs a contrast >= 0 (or inf)");
             break;
         case 'U':

@@ -165,8 +165,7 @@ int cmd_pair(int argc, char **argv)
                 return cli_usage("pair", "--coincidence needs a fraction of the phase-centre spacing in [0, 0.5]");
             break;
         case 'T':
-            if (!strcmp(optarg, "inf")) compact_contrast = INFINITY;
-            else if (cli_parse_double(optarg, &compact_contrast) || !(compact_contrast >= 0))
+            if (cli_parse_nonneg_or_inf(optarg, &compact_contrast))
                 return cli_usage("pair", "--compact-contrast needs a contrast >= 0 (or inf)");
             break;
         case 'C':
