@@ -19,8 +19,9 @@ static const char *help =
     "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
     "                       [--cross-extent M] [--range-extent M] [--eta-max E] [--final C]\n"
     "                       [--search-grid G] [--coincidence F] [--compact-contrast C]\n"
-    "                       [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]\n"
-    "                       [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]\n"
+    "                       [--eta-outlier R] [--no-aiding] [--no-resolve]\n"
+    "                       [--motion-sigma S,W,Y] [--speed-lags none|dvl|pairs]\n"
+    "                       [--aiding-bias S,W,Y]\n"
     "                       [--threads N] [--gpu] [--json] [--checkpoint FILE]\n"
     "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
     "       sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]\n"
@@ -75,7 +76,10 @@ static const char *help =
     "                    'sasnav pair --help')\n"
     "  --compact-contrast C  the contrast of p's image or q's above which a\n"
     "                    pair's scene is compact for its verdict (default 4; 'inf':\n"
-    "                    never; see 'sasnav pair --help')\n"
+"                    never; see 'sasnav pair --help')\n"
+    "  --eta-outlier R   a pair whose eta exceeds R times the run's median pair\n"
+    "                    eta is 'ambiguous' at best (default 1.8; > 1, or 'inf':\n"
+    "                    off; needs 6 pairs; docs/estimator.md, \"Verdict\")\n"
     "  --final C         each pair's final-stage criterion: auto (default), eta\n"
     "                    or joint (see 'sasnav pair --help')\n"
     "  --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)\n"
@@ -242,6 +246,8 @@ static void print_json(const char *input, const sasnav_navigation *nav)
     json_object_set_new(root, "tx_yaw",
                         json_string(nav->gyro_tx_yaw ? "gyro" : nav->pairs_tx_yaw ? "pairs" : "none"));
     json_object_set_new(root, "skipped_long_baselines", json_integer(nav->n_skipped));
+    json_object_set_new(root, "eta_median", real_or_null(nav->eta_median));
+    json_object_set_new(root, "eta_outliers", json_integer(nav->n_eta_outliers));
     json_object_set_new(root, "has_truth", json_boolean(nav->has_truth));
     if (nav->has_truth) {
         sasnav_pose f = nav->cumulative[n - 1];
@@ -276,6 +282,7 @@ static void print_json(const char *input, const sasnav_navigation *nav)
         json_object_set_new(o, "eta", real_or_null(np->result.eta));
         json_object_set_new(o, "margin", isfinite(np->result.margin) ? json_real(np->result.margin) : json_null());
         json_object_set_new(o, "coincidence", json_boolean(np->result.coincidence));
+        json_object_set_new(o, "eta_outlier", json_boolean(np->eta_outlier));
         if (np->result.verdict != SASNAV_VERDICT_UNCHECKED && np->result.evaluations > 0) {
             json_object_set_new(o, "final_criterion",
                                 json_string(sasnav_final_criterion_name(np->result.final_criterion)));
@@ -516,6 +523,7 @@ int cmd_navigate(int argc, char **argv)
         {"gpu", no_argument, 0, 'g'},        {"eta-max", required_argument, 0, 'e'},
         {"final", required_argument, 0, 'c'},  {"search-grid", required_argument, 0, 'P'},
         {"coincidence", required_argument, 0, 'J'}, {"compact-contrast", required_argument, 0, 'Q'},
+        {"eta-outlier", required_argument, 0, 'O'},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -530,7 +538,7 @@ int cmd_navigate(int argc, char **argv)
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         /* Options of the pair navigation alone (refused with --virtual-array). */
-        if (strchr("mLyfAFUNBSRMCgeP", opt)) n_general++;
+        if (strchr("mLyfAFUNBSRMCgePO", opt)) n_general++;
         have_coinc |= opt == 'J';
         have_cc |= opt == 'Q';
         have_cross |= opt == 'X';
@@ -592,6 +600,10 @@ int cmd_navigate(int argc, char **argv)
         case 'Q':
             if (cli_parse_nonneg_or_inf(optarg, &no.pair.verdict_contrast))
                 return cli_usage("navigate", "--compact-contrast needs a contrast >= 0 (or inf)");
+            break;
+        case 'O':
+            if (cli_parse_nonneg_or_inf(optarg, &no.eta_outlier) || !(no.eta_outlier > 1))
+                return cli_usage("navigate", "--eta-outlier needs a factor > 1 (or inf)");
             break;
         case 'U':
             if (cli_parse_double(optarg, &no.pair.surge_sigma) || !(no.pair.surge_sigma >= 0))
@@ -802,10 +814,11 @@ int cmd_navigate(int argc, char **argv)
         if (np->verdict == SASNAV_VERDICT_UNCHECKED && np->resolution == SASNAV_RESOLVED_NONE)
             n_unchecked++; /* one line for them all, below */
         else if (flagged(np))
-            fprintf(stderr, "sasnav navigate: warning: pair %d-%d is %s (%s%s%s%s)\n", np->p, np->q,
+            fprintf(stderr, "sasnav navigate: warning: pair %d-%d is %s (%s%s%s%s%s)\n", np->p, np->q,
                     np->resolution == SASNAV_RESOLVED_BRIDGED ? "bridged" : sasnav_verdict_name(np->verdict),
                     np->status != SASNAV_OK ? sasnav_strerror(np->status) : "estimate",
                     np->result.coincidence ? " at a phase-centre coincidence on a compact scene" : "",
+                    np->eta_outlier ? " with an eta far above the run's" : "",
                     np->resolution == SASNAV_RESOLVED_BRIDGED ? ": aiding and motion model used" : "",
                     np->resolution == SASNAV_RESOLVED_NONE ? "" : "; resolved over the run");
         else if (np->resolution != SASNAV_RESOLVED_NONE)

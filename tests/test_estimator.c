@@ -991,8 +991,73 @@ static void check_joint(void)
     sasnav_run_free(run);
 }
 
+/* sasnav_pair_rejudge: the verdict again from a result's fields, as the
+ * rules of docs/estimator.md "Verdict" state them (here with the
+ * estimator's own option values), for a result that took another
+ * estimate's margin (sasnav_pair_result_carry): the retry of a
+ * multi-transmitter pair without a gyro. Needs no data. */
+static void check_rejudge(void)
+{
+    sasnav_system sys;
+    sasnav_system_default(&sys);
+    sasnav_array a;
+    sasnav_array_uniform(&a, 8, 0.05, 0.05, 0.05);
+    sasnav_window w;
+    sasnav_window_for_ranges(&sys, 9.0, 11.0, 8, &w);
+    sasnav_pair_opts o;
+    sasnav_pair_default_opts(&o);
+    sasnav_pair *pr = NULL;
+    CHECK_OK(sasnav_pair_create(&sys, &a, &w, &o, &pr));
+    if (!pr) return;
+    const sasnav_pair_opts *po = sasnav_pair_options(pr);
+    double m_min = po->verdict_margin_min, m_cpt = po->verdict_margin_compact, gate = po->verdict_contrast;
+    CHECK(m_cpt > m_min, "the compact margin %.3f is not above the margin %.3f", m_cpt, m_min);
+    sasnav_pair_result base;
+    memset(&base, 0, sizeof base);
+    base.status = SASNAV_OK;
+    base.overlap = 1.0;
+    base.eta = 0.5 * po->verdict_eta_max;
+    base.margin = 0.5 * (m_min + m_cpt); /* between the two margins */
+    base.contrast = base.contrast_q = 0.5 * gate;
+    base.verdict = SASNAV_VERDICT_OK;
+    struct {
+        const char *what;
+        int field;
+        double value;
+        int want;
+    } cases[] = {
+        {"speckle, margin between the two", 0, 0, SASNAV_VERDICT_OK},
+        {"p's image compact", 1, 1.5, SASNAV_VERDICT_AMBIGUOUS},
+        {"q's image compact", 2, 1.5, SASNAV_VERDICT_AMBIGUOUS},
+        {"margin under the minimum", 3, 0.9, SASNAV_VERDICT_AMBIGUOUS},
+        {"eta over the bound", 4, 2.5, SASNAV_VERDICT_FAILED},
+        {"not converged", 5, 0, SASNAV_VERDICT_FAILED},
+        {"no overlap", 6, 0, SASNAV_VERDICT_NO_OVERLAP},
+        {"at a coincidence, speckle", 7, 0, SASNAV_VERDICT_AMBIGUOUS},
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        sasnav_pair_result r = base;
+        r.verdict = cases[c].want == SASNAV_VERDICT_OK ? SASNAV_VERDICT_AMBIGUOUS : SASNAV_VERDICT_OK;
+        switch (cases[c].field) {
+        case 1: r.contrast = cases[c].value * gate; break;
+        case 2: r.contrast_q = cases[c].value * gate; break;
+        case 3: r.margin = cases[c].value * m_min; break;
+        case 4: r.eta = cases[c].value * base.eta; break;
+        case 5: r.status = SASNAV_ERR_NOT_CONVERGED; break;
+        case 6: r.overlap = 0.0; break;
+        case 7: r.coincidence = 1; break;
+        default: break;
+        }
+        sasnav_pair_rejudge(pr, &r);
+        CHECK(r.verdict == cases[c].want, "rejudge, %s: %s, expected %s", cases[c].what,
+              sasnav_verdict_name(r.verdict), sasnav_verdict_name(cases[c].want));
+    }
+    sasnav_pair_destroy(pr);
+}
+
 int main(void)
 {
+    check_rejudge();
     check_opts_rules();
     check_joint();
     check_two_pass();

@@ -700,8 +700,108 @@ static void test_trust_point(void)
     sasnav_run_free(run);
 }
 
+/* The eta-outlier rule (opts.eta_outlier) on a navigation reused with
+ * estimates made up for it: 8 pings, 7 consecutive pairs, every estimate
+ * at the truth (a run without motion errors: motion error 0) but pair 3,
+ * which slipped by a phase-centre spacing (+25 mm of surge) with an eta of
+ * 0.60 against the others' 0.18-0.23. No pair is estimated: the pairs come
+ * from the reused navigation and have no candidates, so the resolution
+ * only applies the verdicts and the smoother. The median is checked
+ * against the one computed here, the line on both sides of the pair's
+ * ratio (0.60 / 0.21 = 2.857), the flag's effect in the smoother, and the
+ * cases where the rule stands aside. */
+static void test_eta_outlier(void)
+{
+    enum { N = 8 };
+    sasnav_run *run = simulate(N, 0.2, 0, 0, 0);
+    if (!run) return;
+    const double eta[N - 1] = {0.20, 0.22, 0.18, 0.60, 0.19, 0.23, 0.21};
+    const double median = 0.21; /* of the seven: 0.18 0.19 0.20 0.21 0.22 0.23 0.60 */
+    const double slip = 0.025;
+    sasnav_navigate_pair made[N - 1];
+    memset(made, 0, sizeof made);
+    for (int j = 0; j < N - 1; j++) {
+        sasnav_navigate_pair *m = &made[j];
+        m->p = j;
+        m->q = j + 1;
+        m->first_status = SASNAV_OK;
+        sasnav_pair_result *r = &m->first_result;
+        r->status = SASNAV_OK;
+        r->verdict = SASNAV_VERDICT_OK;
+        r->eta = eta[j];
+        r->margin = INFINITY;
+        r->chosen = -1;
+        r->error = (sasnav_pose){j == 3 ? slip : 0.0, 0.0, 0.0};
+        r->displacement = sasnav_ping_displacement(&run->nav[j], &run->nav[j + 1]);
+        r->displacement.x += r->error.x;
+    }
+    sasnav_navigation given;
+    memset(&given, 0, sizeof given);
+    given.method = SASNAV_METHOD_SUBSPACE;
+    given.n_pings = N;
+    given.n_pairs = N - 1;
+    given.pairs = made;
+    sasnav_navigate_opts o;
+    sasnav_navigate_default_opts(&o);
+    o.reuse = &given;
+    o.use_aiding = 0;
+    sasnav_navigation nav;
+    /* default factor 1.8: pair 3 alone is over the line */
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    CHECK(fabs(nav.eta_median - median) < 1e-15, "eta median %.17g, expected %.2f", nav.eta_median, median);
+    CHECK(nav.n_eta_outliers == 1, "%d eta outliers, expected 1", nav.n_eta_outliers);
+    for (int j = 0; j < nav.n_pairs && j < N - 1; j++) {
+        const sasnav_navigate_pair *np = &nav.pairs[j];
+        int want = j == 3;
+        CHECK(np->eta_outlier == want && np->verdict == (want ? SASNAV_VERDICT_AMBIGUOUS : SASNAV_VERDICT_OK) &&
+                  np->first_verdict == np->verdict && np->result.verdict == SASNAV_VERDICT_OK,
+              "pair %d: eta outlier %d, verdict %s, first %s", j, np->eta_outlier,
+              sasnav_verdict_name(np->verdict), sasnav_verdict_name(np->first_verdict));
+    }
+    /* Flagged, the slip's surge goes to the motion model (the neighbours'
+     * 0): within a fifth of the slip; passed as ok it stays (more than
+     * four fifths: the smoother's link sigma is 1 mm, the motion model's
+     * 10 mm). */
+    double flagged_surge = nav.n_pairs > 3 ? nav.pairs[3].fused.x : NAN;
+    sasnav_navigation_free(&nav);
+    o.eta_outlier = INFINITY;
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    double kept_surge = nav.n_pairs > 3 ? nav.pairs[3].fused.x : NAN;
+    CHECK(isnan(nav.eta_median) && nav.n_eta_outliers == 0 && nav.n_flagged == 0,
+          "rule off: median %g, %d outliers, %d flagged", nav.eta_median, nav.n_eta_outliers, nav.n_flagged);
+    CHECK(fabs(flagged_surge) < 0.2 * slip && kept_surge > 0.8 * slip,
+          "slipped pair's fused surge: %.2f mm flagged, %.2f mm passed", 1e3 * flagged_surge, 1e3 * kept_surge);
+    sasnav_navigation_free(&nav);
+    /* the line on either side of the pair's ratio 2.857 */
+    o.eta_outlier = 2.85;
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    CHECK(nav.n_eta_outliers == 1 && nav.pairs[3].eta_outlier, "factor 2.85: %d outliers", nav.n_eta_outliers);
+    sasnav_navigation_free(&nav);
+    o.eta_outlier = 2.86;
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    CHECK(nav.n_eta_outliers == 0 && nav.pairs[3].verdict == SASNAV_VERDICT_OK, "factor 2.86: %d outliers",
+          nav.n_eta_outliers);
+    sasnav_navigation_free(&nav);
+    /* fewer than 6 usable estimates: no median, no rule */
+    o.eta_outlier = 1.8;
+    made[0].first_status = made[6].first_status = SASNAV_ERR_NO_OVERLAP;
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    CHECK(isnan(nav.eta_median) && nav.n_eta_outliers == 0 && nav.pairs[3].verdict == SASNAV_VERDICT_OK,
+          "5 usable pairs: median %g, %d outliers", nav.eta_median, nav.n_eta_outliers);
+    sasnav_navigation_free(&nav);
+    made[0].first_status = made[6].first_status = SASNAV_OK;
+    /* the factor must be > 1 */
+    const double bad[] = {1.0, 0.5, -2.0, NAN};
+    for (int b = 0; b < 4; b++) {
+        o.eta_outlier = bad[b];
+        CHECK(sasnav_navigate(run, &o, &nav) == SASNAV_ERR_ARG, "eta outlier factor %g accepted", bad[b]);
+    }
+    sasnav_run_free(run);
+}
+
 int main(void)
 {
+    test_eta_outlier();
     test_trust_point();
     test_threads_over_pairs();
     test_two_pass();

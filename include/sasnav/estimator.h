@@ -475,6 +475,15 @@ int sasnav_tx_yaw_from_rates(int n, const double *epoch, const double *rate, con
  * evaluations become the sum of both. */
 void sasnav_pair_result_carry(const sasnav_pair_result *first, sasnav_pair_result *again);
 
+/* The verdict of `result` again, from its overlap, status, eta, margin,
+ * contrasts and coincidence, under `pair`'s options: after
+ * sasnav_pair_result_carry has given an estimate made by
+ * sasnav_pair_estimate_from (judged with an infinite margin) the first
+ * estimate's margin. On a scene that is compact for the verdict by the new
+ * estimate's contrasts, that margin must reach verdict_margin_compact.
+ * Nothing on NULL. */
+void sasnav_pair_rejudge(const sasnav_pair *pair, sasnav_pair_result *result);
+
 /* Without a gyro, the transmitters' turn between transmission and
  * reception from an estimated displacement between two pings: the turn
  * per metre of that displacement (theta / its length) times the distance

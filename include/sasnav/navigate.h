@@ -164,6 +164,17 @@ typedef struct {
                                  d / (2 R) of yaw) plus this many of
                                  the aiding's standard deviations is
                                  estimated again from the aiding (default 5) */
+    double eta_outlier;       /* a consecutive pair whose final eta exceeds
+                                 this multiple of the run's median eta (over
+                                 its usable subspace estimates, at least 6)
+                                 is "ambiguous" at best: on one run the
+                                 pairs share the system, the noise and the
+                                 seabed statistics, so an eta far above
+                                 theirs marks an estimate off the truth,
+                                 or one whose scene differs (a bright
+                                 feature on one ping's beam flank:
+                                 docs/estimator.md, "Verdict"). Default
+                                 1.8; must be > 1; +inf: off */
     int nthreads;             /* OpenMP threads of the estimators (0 = OpenMP
                                  default); copied into pair and dpca */
     int speed_lags;           /* per-ping EPCA Tx-array offsets scaled by the
@@ -260,6 +271,9 @@ typedef struct {
                                   is built from) */
     sasnav_pair_result first_result; /* the estimate before the resolution */
     int first_status;          /* its status */
+    int eta_outlier;           /* 1: its eta exceeds opts.eta_outlier x the
+                                  run's median (its verdict is then
+                                  "ambiguous" at best) */
 } sasnav_navigate_pair;
 
 /* Output of sasnav_navigate; release the arrays with sasnav_navigation_free. */
@@ -317,6 +331,12 @@ struct sasnav_navigation {
                                      turned by the yaw from the pairs' own
                                      first estimates (opts.tx_yaw) and its
                                      ok consecutive pairs estimated again */
+    double eta_median;            /* median final eta of the usable
+                                     consecutive subspace estimates (NaN:
+                                     another method, fewer than 6, or
+                                     opts.eta_outlier off) */
+    int n_eta_outliers;           /* consecutive pairs over opts.eta_outlier x
+                                     eta_median */
 };
 
 /* Pair j (0 <= j < n_pairs) of `nav`, whether its pairs are packed

@@ -1411,9 +1411,14 @@ int sasnav_pair_estimate_intervals(const sasnav_run *run, int p, int q,
                 r2 == SASNAV_ERR_UNSUPPORTED)
                 rc = r2;
             else if (!r2 && again.verdict == SASNAV_VERDICT_OK) {
+                /* judged again with the first estimate's margin (its own
+                 * was infinite): kept only if still ok */
                 sasnav_pair_result_carry(&out[s].result, &again);
-                out[s].result = again;
-                out[s].tx_yaw_from_estimate = 1;
+                sasnav_pair_rejudge(pair, &again);
+                if (again.verdict == SASNAV_VERDICT_OK) {
+                    out[s].result = again;
+                    out[s].tx_yaw_from_estimate = 1;
+                }
             }
         }
         sasnav_pair_destroy(pair);

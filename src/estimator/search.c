@@ -1176,17 +1176,30 @@ static double margin_min(const sasnav_pair *pr, const sasnav_pair_result *res)
     return m;
 }
 
-/* The verdict on a finished estimate (docs/estimator.md, "Verdict"). */
-static void judge(const sasnav_pair *pr, sasnav_pair_result *res, int converged, double pc_spacing)
+/* The verdict from a result's overlap, eta, margin, contrasts and
+ * coincidence. */
+static void verdict_of(const sasnav_pair *pr, sasnav_pair_result *res, int converged)
 {
     const sasnav_pair_opts *o = sasnav_pair_options(pr);
-    res->contrast = pair_contrast(pr);
-    res->coincidence = at_coincidence(pr, res, pc_spacing);
     if (!(res->overlap >= o->min_overlap)) res->verdict = SASNAV_VERDICT_NO_OVERLAP;
     else if (!converged || !(res->eta <= o->verdict_eta_max)) res->verdict = SASNAV_VERDICT_FAILED;
     else if (!(res->margin >= margin_min(pr, res)) || res->coincidence)
         res->verdict = SASNAV_VERDICT_AMBIGUOUS;
     else res->verdict = SASNAV_VERDICT_OK;
+}
+
+/* The verdict on a finished estimate (docs/estimator.md, "Verdict"). */
+static void judge(const sasnav_pair *pr, sasnav_pair_result *res, int converged, double pc_spacing)
+{
+    res->contrast = pair_contrast(pr);
+    res->coincidence = at_coincidence(pr, res, pc_spacing);
+    verdict_of(pr, res, converged);
+}
+
+void sasnav_pair_rejudge(const sasnav_pair *pr, sasnav_pair_result *res)
+{
+    if (!pr || !res) return;
+    verdict_of(pr, res, res->status != SASNAV_ERR_NOT_CONVERGED);
 }
 
 /* The final stage (unless final_stage is 0) and the result fields from the

@@ -30,6 +30,7 @@ void sasnav_navigate_default_opts(sasnav_navigate_opts *opts)
     opts->motion_sigma = (sasnav_pose){0.01, 0.01, 0.01};
     opts->eta_weight = 20.0;
     opts->aiding_gate = 5.0;
+    opts->eta_outlier = 1.8;
     opts->speed_lags = 1;
     opts->aiding_bias_sigma = (sasnav_pose){4e-4, 4e-4, 0};
     opts->tx_yaw = 1;
@@ -487,6 +488,8 @@ static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
         return sasnav_set_error(SASNAV_ERR_ARG,
                                 "navigate: motion standard deviations must be > 0, the eta weight "
                                 ">= 0 and the aiding gate > 0");
+    if (!(o->eta_outlier > 1)) /* (NaN too) */
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigate: the eta outlier factor must be > 1 (+inf: off)");
     if (o->method == SASNAV_METHOD_SUBSPACE && !(run->range_of_interest > 0))
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: the run has no range of interest");
     if (!(run->tx_lag >= 0) || !isfinite(run->tx_lag))
@@ -796,6 +799,60 @@ static sasnav_pose motion_prediction(const nav_ctx *ctx, int n, int j)
     return (sasnav_pose){a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), a.theta + t * (b.theta - a.theta)};
 }
 
+/* Fewest usable estimates for a run's median eta (opts.eta_outlier). */
+#define ETA_OUTLIER_MIN_PAIRS 6
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The eta-outlier rule (opts.eta_outlier): the first n consecutive pairs'
+ * median final eta, and each "ok" pair far above it made "ambiguous" (its
+ * first verdict too: the estimate is what is in doubt). Before the joint
+ * choice, so that the motion model and the aiding may settle the pair.
+ * On the paper-trajectory's speckle seabed the correct pairs of a run stay
+ * within 1.5 times their run's median eta; on runs with a seabed feature
+ * 20-28 dB above the rest (docs/validation.md, "A bright feature entering
+ * the beam") correct pairs reach 2-4 times it, and so do the slipped pairs
+ * and the pairs 3-6 mm off that the contrast gates pass. */
+static int flag_eta_outliers(nav_ctx *ctx, sasnav_navigation *out, int n)
+{
+    const sasnav_navigate_opts *o = ctx->opts;
+    out->eta_median = NAN;
+    out->n_eta_outliers = 0;
+    if (o->method != SASNAV_METHOD_SUBSPACE || !isfinite(o->eta_outlier) || n < ETA_OUTLIER_MIN_PAIRS)
+        return SASNAV_OK;
+    double *eta = malloc(sizeof *eta * (size_t)n);
+    if (!eta) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the joint resolution");
+    sasnav_navigate_pair pair, *np = &pair;
+    int m = 0;
+    for (int j = 0; j < n; j++) {
+        get_pair(ctx, j, np);
+        if (usable(np) && np->result.eta > 0 && isfinite(np->result.eta)) eta[m++] = np->result.eta;
+    }
+    if (m < ETA_OUTLIER_MIN_PAIRS) {
+        free(eta);
+        return SASNAV_OK;
+    }
+    qsort(eta, (size_t)m, sizeof *eta, cmp_double);
+    double med = m % 2 ? eta[m / 2] : 0.5 * (eta[m / 2 - 1] + eta[m / 2]);
+    free(eta);
+    out->eta_median = med;
+    double line = o->eta_outlier * med;
+    int rc = SASNAV_OK;
+    for (int j = 0; j < n && !rc; j++) {
+        get_pair(ctx, j, np);
+        if (!usable(np) || !(np->result.eta > line)) continue;
+        np->eta_outlier = 1;
+        out->n_eta_outliers++;
+        if (np->verdict == SASNAV_VERDICT_OK) np->verdict = np->first_verdict = SASNAV_VERDICT_AMBIGUOUS;
+        rc = put_pair(ctx, j, np);
+    }
+    return rc;
+}
+
 /* Step 0 of navigate.h: joint choice, new estimates where needed, robust
  * smoother. Consecutive pairs only. */
 static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
@@ -814,8 +871,10 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
         np->fused = np->result.error;
         np->aiding = (sasnav_pose){0, 0, 0};
         np->aiding_sigma = (sasnav_pose){INFINITY, INFINITY, INFINITY};
+        np->eta_outlier = 0;
         rc = put_pair(ctx, j, np);
     }
+    if (!rc) rc = flag_eta_outliers(ctx, out, n < out->n_pairs ? n : out->n_pairs);
     if (rc || !o->resolve || n < 1) return rc;
     sasnav_pose *a = malloc(sizeof *a * (size_t)n), *sa = malloc(sizeof *sa * (size_t)n);
     sasnav_pose *m = malloc(sizeof *m * (size_t)n), *sm = malloc(sizeof *sm * (size_t)n);
@@ -1121,7 +1180,12 @@ static int second_pass(nav_ctx *ctx, int retry_flagged)
         }
         if (rc || r.verdict != SASNAV_VERDICT_OK) continue; /* keep the first estimate */
         if (again) {
-            adopt_estimate(np, &r);
+            /* judged again with the first estimate's margin (its own was
+             * infinite): kept only if still ok */
+            sasnav_pair_result_carry(&np->result, &r);
+            sasnav_pair_rejudge(est, &r);
+            if (r.verdict != SASNAV_VERDICT_OK) continue;
+            np->result = r;
         } else { /* its own candidates; the time and work of both */
             r.seconds += np->result.seconds;
             r.applications += np->result.applications;

@@ -408,6 +408,7 @@ class NavigateOpts(Structure):  # navigate.h
         ("motion_sigma", Pose),
         ("eta_weight", c_double),
         ("aiding_gate", c_double),
+        ("eta_outlier", c_double),
         ("nthreads", c_int),
         ("speed_lags", c_int),
         ("aiding_bias_sigma", Pose),
@@ -439,6 +440,7 @@ class NavigatePair(Structure):  # navigate.h
         ("fused", Pose),
         ("first_result", PairResult),
         ("first_status", c_int),
+        ("eta_outlier", c_int),
     ]
 
 
@@ -474,6 +476,8 @@ class NavigationC(Structure):  # navigate.h: struct sasnav_navigation
         ("packed", c_void_p),
         ("gyro_tx_yaw", c_int),
         ("pairs_tx_yaw", c_int),
+        ("eta_median", c_double),
+        ("n_eta_outliers", c_int),
     ]
 
 
@@ -596,6 +600,9 @@ PROTOTYPES = {
     "sasnav_run_tx_yaw": (_i, [_P(RunC), _d, _P(_d)]),
     "sasnav_pair_estimate": (_i, [c_void_p, _P(PairResult)]),
     "sasnav_pair_estimate_from": (_i, [c_void_p, Pose, _P(PairResult)]),
+    "sasnav_pair_result_carry": (_v, [_P(PairResult), _P(PairResult)]),
+    "sasnav_pair_rejudge": (_v, [c_void_p, _P(PairResult)]),
+    "sasnav_run_tx_yaw_from_estimate": (_i, [_P(RunC), Pose, _d, _P(_d)]),
     "sasnav_pair_destroy": (_v, [c_void_p]),
     # dpca.h, navigate.h
     "sasnav_dpca_default_opts": (_v, [_P(DpcaOpts)]),

@@ -1078,8 +1078,11 @@ def estimate_pair(run, p=0, q=1, *, prior_start=None, lags=None, **opts):
                     check(L.sasnav_pair_set_data_run(pair, r, p, q, dp, dq, nominal, yaw2.ctypes.data_as(dptr)))
                     check(L.sasnav_pair_estimate_from(pair, res.error, ctypes.byref(again)))
                     if again.verdict == 0:
+                        # judged again with the first's margin: kept if still ok
                         L.sasnav_pair_result_carry(ctypes.byref(res), ctypes.byref(again))
-                        res = again
+                        L.sasnav_pair_rejudge(pair, ctypes.byref(again))
+                        if again.verdict == 0:
+                            res = again
     finally:
         L.sasnav_pair_destroy(pair)
     return _estimate_from_c(res, p, q, _pose(nominal), truth)
@@ -1096,7 +1099,9 @@ class NavigatedPair:
     after the joint resolution, `first_estimate` before it; `status` "ok" or
     the failure; verdict / first_verdict; resolution ("kept", "candidate",
     "re-estimated", "bridged"); truth and error (fused - truth) when the run
-    holds the truth; aiding and aiding_sigma when the aiding was used."""
+    holds the truth; aiding and aiding_sigma when the aiding was used;
+    eta_outlier: its eta exceeds the eta_outlier option times the run's
+    median (its verdict is then "ambiguous" at best)."""
 
     p: int
     q: int
@@ -1112,6 +1117,7 @@ class NavigatedPair:
     error: Optional[Pose]
     aiding: Optional[Pose]
     aiding_sigma: Optional[Pose]
+    eta_outlier: bool = False
 
 
 @dataclass(eq=False)
@@ -1151,6 +1157,8 @@ class Navigation:
     tx_yaw: str = "none"  # channels with transmitters of their own: where their turn
     #                       between transmission and reception came from:
     #                       "gyro", "pairs" (the pairs' own yaw) or "none"
+    eta_median: float = math.nan  # the run's median pair eta (NaN: not computed)
+    n_eta_outliers: int = 0  # pairs over eta_outlier x eta_median
 
     def placed(self, first_pose):
         """The estimated ping poses moved rigidly so that the first PCA
@@ -1186,7 +1194,8 @@ def _navigation_from_c(nv, truth):
             _verdict_name(pr.verdict), _verdict_name(pr.first_verdict),
             lib().sasnav_resolution_name(pr.resolution).decode(),
             _estimate_from_c(pr.result, pr.p, pr.q, nom, t),
-            _estimate_from_c(pr.first_result, pr.p, pr.q, nom, t), t, err, aid, aid_s))
+            _estimate_from_c(pr.first_result, pr.p, pr.q, nom, t), t, err, aid, aid_s,
+            bool(pr.eta_outlier)))
 
     def poses(ptr, dtype):
         return _copy_out(_addr(ptr), dtype, n) if (has_truth and ptr) else None
@@ -1201,7 +1210,8 @@ def _navigation_from_c(nv, truth):
         _pose(nv.rms_cumulative) if has_truth else None,
         _pose(nv.rms_differential) if has_truth else None,
         nv.seconds, nv.seconds_per_pair, nv.pairs_per_second, nv.threads_over_pairs,
-        "gyro" if nv.gyro_tx_yaw else "pairs" if nv.pairs_tx_yaw else "none")
+        "gyro" if nv.gyro_tx_yaw else "pairs" if nv.pairs_tx_yaw else "none",
+        nv.eta_median, nv.n_eta_outliers)
 
 
 def _navigate_opts(pair, dpca, opts):
@@ -1295,7 +1305,7 @@ def navigate(run, *, pair=None, dpca=None, progress=None, done=None, **opts):
     (navigate.h) by name: method
     ("subspace", "dpca", "aiding"), long_baselines, align, resolve,
     use_aiding, motion_sigma=(s, w, y), link_sigma, long_sigma, eta_weight,
-    aiding_gate, speed_lags ("none", "dvl" (default), "pairs"), aiding_bias_sigma,
+    aiding_gate, eta_outlier (math.inf: off), speed_lags ("none", "dvl" (default), "pairs"), aiding_bias_sigma,
     tx_yaw ("auto" (default), "pairs", "none": a multi-transmitter head's
     turn between transmission and reception, as `--tx-yaw`), threads (= nthreads); any other keyword that names a field of
     sasnav_pair_opts (k, i, yaw_sigma, fix_yaw, ...) goes to the subspace
