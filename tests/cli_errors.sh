@@ -170,6 +170,8 @@ expect_fail "pair coincidence beyond half a spacing" "" "$SASNAV" pair "$T/pair.
 expect_fail "navigate negative coincidence" "$T/nav_co.h5" "$SASNAV" navigate "$T/pair.h5" --coincidence -0.1 -o "$T/nav_co.h5"
 expect_fail "pair negative compact contrast" "" "$SASNAV" pair "$T/pair.h5" --compact-contrast -1
 expect_fail "navigate compact contrast not a number" "$T/nav_cc.h5" "$SASNAV" navigate "$T/pair.h5" --compact-contrast x -o "$T/nav_cc.h5"
+expect_fail "navigate eta outlier factor 1" "$T/nav_eo.h5" "$SASNAV" navigate "$T/pair.h5" --eta-outlier 1 -o "$T/nav_eo.h5"
+expect_fail "navigate eta outlier not a number" "$T/nav_eo.h5" "$SASNAV" navigate "$T/pair.h5" --eta-outlier x -o "$T/nav_eo.h5"
 expect_fail "navigate range extent not a number" "$T/nav_re.h5" "$SASNAV" navigate "$T/pair.h5" --range-extent x -o "$T/nav_re.h5"
 expect_fail "validate surge sigma not a number" "" "$SASNAV" validate "$T/pair.h5" --surge-sigma x -o "$T/val"
 expect_fail "tank negative clutter" "" "$SASNAV" tank --clutter -1 -o "$T/tankrec"

@@ -66,9 +66,12 @@ for d in (fused, alone):
     for p in d["pairs"]:
         for k in ("status", "first_status", "resolution", "candidates", "estimate", "eta", "error"):
             assert k in p, k
+        # two pairs: too few for the run's median eta (6), so no outlier
+        assert p["eta_outlier"] is False, p["eta_outlier"]
         assert p["status"] in ("ok", "ambiguous", "failed", "no_overlap"), p["status"]
         assert p["resolution"] in ("kept", "candidate", "re-estimated", "bridged"), p["resolution"]
         assert len(p["candidates"]) >= 1 and sum(c["chosen"] for c in p["candidates"]) == 1
+    assert d["eta_median"] is None and d["eta_outliers"] == 0, (d["eta_median"], d["eta_outliers"])
 for p in fused["pairs"]:
     assert "aiding" in p and "aiding_sigma" in p, p.keys()
     # A navigation-grade gyro: the fused yaw within 1e-5 rad of the truth.

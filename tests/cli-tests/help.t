@@ -248,8 +248,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                          [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]
                          [--cross-extent M] [--range-extent M] [--eta-max E] [--final C]
                          [--search-grid G] [--coincidence F] [--compact-contrast C]
-                         [--no-aiding] [--no-resolve] [--motion-sigma S,W,Y]
-                         [--speed-lags none|dvl|pairs] [--aiding-bias S,W,Y]
+                         [--eta-outlier R] [--no-aiding] [--no-resolve]
+                         [--motion-sigma S,W,Y] [--speed-lags none|dvl|pairs]
+                         [--aiding-bias S,W,Y]
                          [--threads N] [--gpu] [--json] [--checkpoint FILE]
                          [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5
          sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]
@@ -305,6 +306,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --compact-contrast C  the contrast of p's image or q's above which a
                       pair's scene is compact for its verdict (default 4; 'inf':
                       never; see 'sasnav pair --help')
+    --eta-outlier R   a pair whose eta exceeds R times the run's median pair
+                      eta is 'ambiguous' at best (default 1.8; > 1, or 'inf':
+                      off; needs 6 pairs; docs/estimator.md, "Verdict")
     --final C         each pair's final-stage criterion: auto (default), eta
                       or joint (see 'sasnav pair --help')
     --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)
