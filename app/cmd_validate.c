@@ -45,7 +45,8 @@ static const char *help =
     "                      truth when known), its margin, whether it sits at a\n"
     "                      phase-centre coincidence, the contrasts of p's and\n"
     "                      q's images (either above 4: compact-scene verdicts),\n"
-    "                      status and verdict\n"
+    "                      eta, whether that is far above its phase's\n"
+    "                      (navigate --eta-outlier), status and verdict\n"
     "  trajectories.png    along/cross-track deviation from the mean of the K\n"
     "  correlation.csv     pairwise image correlations (navigated images)\n"
     "  siso_J.png, simo_J.png   images with the largest K's trajectory\n"
@@ -180,7 +181,7 @@ static int write_tables(const char *dir, const sasnav_validation *v)
     if ((rc = sasnav_text_commit(&out))) return rc;
     join(path, sizeof path, dir, "pairs.csv");
     if ((rc = sasnav_text_open(&out, path))) return rc;
-    fprintf(out.f, "k,p,q,surge,sway,yaw,error_surge,error_sway,error_yaw,margin,coincidence,contrast,contrast_q,status,verdict\n");
+    fprintf(out.f, "k,p,q,surge,sway,yaw,error_surge,error_sway,error_yaw,margin,coincidence,contrast,contrast_q,eta,eta_outlier,status,verdict\n");
     for (int k = 0; k < v->n_k; k++)
         for (int j = 0; j < v->k[k].n_pairs; j++) {
             const sasnav_navigate_pair *np = &v->k[k].pairs[j];
@@ -190,7 +191,8 @@ static int write_tables(const char *dir, const sasnav_validation *v)
             else fprintf(out.f, ",,,");
             if (isfinite(np->result.margin)) fprintf(out.f, "%.4f,", np->result.margin);
             else fprintf(out.f, "inf,");
-            fprintf(out.f, "%d,%.3f,%.3f,", np->result.coincidence, np->result.contrast, np->result.contrast_q);
+            fprintf(out.f, "%d,%.3f,%.3f,%.4f,%d,", np->result.coincidence, np->result.contrast, np->result.contrast_q,
+                    np->result.eta, np->eta_outlier);
             fprintf(out.f, "%s,%s\n", np->status == SASNAV_OK ? "ok" : sasnav_strerror(np->status),
                     sasnav_verdict_name(np->verdict));
         }

@@ -2,6 +2,7 @@
 
 import dataclasses
 import json
+import math
 
 import numpy as np
 import pytest
@@ -80,6 +81,9 @@ def test_navigate_short_run(short_trajectory, tmp_path):
         assert np.allclose(np.subtract(pr.fused, pr.truth), pr.error, atol=1e-12)
     assert nav.has_truth and nav.cumulative.shape == (3,)
     assert abs(nav.cumulative[-1]["y"]) < 1e-3
+    # two pairs: too few (6) for the run's median eta, no outlier
+    assert math.isnan(nav.eta_median) and nav.n_eta_outliers == 0
+    assert not any(pr.eta_outlier for pr in nav.pairs)
     sasnav.write_nav(nav, tmp_path / "nav.h5")
     back = sasnav.read_nav(tmp_path / "nav.h5")
     assert np.array_equal(back.nav, nav.nav) and np.array_equal(back.truth, short_trajectory.truth)

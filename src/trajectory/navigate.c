@@ -736,8 +736,8 @@ static int leanable(const sasnav_navigate_pair *np)
 
 /* A pair whose verdict `verdict` is "ambiguous" only for its own estimate
  * sitting at a phase-centre coincidence on a compact scene: its candidates
- * were told apart (margin), and nothing of the resolution replaced or
- * doubted the estimate. No slip is in doubt: its sway and yaw are an ok
+ * were told apart (margin), nothing of the resolution replaced or doubted
+ * the estimate, and its eta is not far above the run's (eta_outlier). No slip is in doubt: its sway and yaw are an ok
  * pair's, its surge is drawn towards the coincidence. */
 static int coincidence_only(const nav_ctx *ctx, int verdict, const sasnav_navigate_pair *np)
 {
@@ -747,7 +747,7 @@ static int coincidence_only(const nav_ctx *ctx, int verdict, const sasnav_naviga
     double need = po->verdict_margin_compact > po->verdict_margin_min ? po->verdict_margin_compact
                                                                      : po->verdict_margin_min;
     return verdict == SASNAV_VERDICT_AMBIGUOUS && np->result.coincidence && np->result.margin >= need &&
-           np->resolution == SASNAV_RESOLVED_NONE;
+           np->resolution == SASNAV_RESOLVED_NONE && !np->eta_outlier;
 }
 
 /* Standard deviations of a pair's estimate in the smoother. */

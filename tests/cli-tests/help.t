@@ -496,7 +496,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                         truth when known), its margin, whether it sits at a
                         phase-centre coincidence, the contrasts of p's and
                         q's images (either above 4: compact-scene verdicts),
-                        status and verdict
+                        eta, whether that is far above its phase's
+                        (navigate --eta-outlier), status and verdict
     trajectories.png    along/cross-track deviation from the mean of the K
     correlation.csv     pairwise image correlations (navigated images)
     siso_J.png, simo_J.png   images with the largest K's trajectory
