@@ -701,7 +701,8 @@ static void test_trust_point(void)
 }
 
 /* The eta-outlier rule (opts.eta_outlier) on a navigation reused with
- * estimates made up for it: 8 pings, 7 consecutive pairs, every estimate
+ * estimates made up for it (speckle-like: contrasts 0, but one case):
+ * 8 pings, 7 consecutive pairs, every estimate
  * at the truth (a run without motion errors: motion error 0) but pair 3,
  * which slipped by a phase-centre spacing (+25 mm of surge) with an eta of
  * 0.60 against the others' 0.18-0.23. No pair is estimated: the pairs come
@@ -790,6 +791,16 @@ static void test_eta_outlier(void)
           "5 usable pairs: median %g, %d outliers", nav.eta_median, nav.n_eta_outliers);
     sasnav_navigation_free(&nav);
     made[0].first_status = made[6].first_status = SASNAV_OK;
+    /* a compact scene (q's contrast over the verdict's gate): the pair is
+     * left to the compact-scene rules, outside the median and the rule;
+     * the median is then the six others' (0.20 + 0.21) / 2 */
+    made[3].first_result.contrast_q = 1.25 * o.pair.verdict_contrast;
+    CHECK_OK(sasnav_navigate(run, &o, &nav));
+    CHECK(fabs(nav.eta_median - 0.205) < 1e-15 && nav.n_eta_outliers == 0 && !nav.pairs[3].eta_outlier &&
+              nav.pairs[3].verdict == SASNAV_VERDICT_OK,
+          "compact pair: median %.17g, %d outliers", nav.eta_median, nav.n_eta_outliers);
+    sasnav_navigation_free(&nav);
+    made[3].first_result.contrast_q = 0;
     /* the factor must be > 1 */
     const double bad[] = {1.0, 0.5, -2.0, NAN};
     for (int b = 0; b < 4; b++) {

@@ -164,17 +164,21 @@ typedef struct {
                                  d / (2 R) of yaw) plus this many of
                                  the aiding's standard deviations is
                                  estimated again from the aiding (default 5) */
-    double eta_outlier;       /* a consecutive pair whose final eta exceeds
-                                 this multiple of the run's median eta (over
-                                 its usable subspace estimates, at least 6)
-                                 is "ambiguous" at best: on one run the
-                                 pairs share the system, the noise and the
-                                 seabed statistics, so an eta far above
-                                 theirs marks an estimate off the truth,
-                                 or one whose scene differs (a bright
-                                 feature on one ping's beam flank:
-                                 docs/estimator.md, "Verdict"). Default
-                                 1.8; must be > 1; +inf: off */
+    double eta_outlier;       /* a consecutive pair on a speckle-like scene
+                                 (neither contrast above
+                                 pair.verdict_contrast) whose final eta
+                                 exceeds this multiple of the median eta of
+                                 the run's such pairs (usable subspace
+                                 estimates, at least 6) is "ambiguous" at
+                                 best: on one run the pairs share the
+                                 system, the noise and the seabed
+                                 statistics, so an eta far above theirs
+                                 marks an estimate off the truth, or one
+                                 whose scene differs (a bright feature on
+                                 one ping's beam flank; docs/navigation.md,
+                                 "Pairs whose eta stands out from the
+                                 run's"). Default 1.8; must be > 1; +inf:
+                                 off */
     int nthreads;             /* OpenMP threads of the estimators (0 = OpenMP
                                  default); copied into pair and dpca */
     int speed_lags;           /* per-ping EPCA Tx-array offsets scaled by the
@@ -332,8 +336,9 @@ struct sasnav_navigation {
                                      first estimates (opts.tx_yaw) and its
                                      ok consecutive pairs estimated again */
     double eta_median;            /* median final eta of the usable
-                                     consecutive subspace estimates (NaN:
-                                     another method, fewer than 6, or
+                                     consecutive subspace estimates on
+                                     speckle-like scenes (NaN: another
+                                     method, fewer than 6, or
                                      opts.eta_outlier off) */
     int n_eta_outliers;           /* consecutive pairs over opts.eta_outlier x
                                      eta_median */

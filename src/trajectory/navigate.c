@@ -736,8 +736,8 @@ static int leanable(const sasnav_navigate_pair *np)
 
 /* A pair whose verdict `verdict` is "ambiguous" only for its own estimate
  * sitting at a phase-centre coincidence on a compact scene: its candidates
- * were told apart (margin), nothing of the resolution replaced or doubted
- * the estimate, and its eta is not far above the run's (eta_outlier). No slip is in doubt: its sway and yaw are an ok
+ * were told apart (margin), and nothing of the resolution replaced or
+ * doubted the estimate. No slip is in doubt: its sway and yaw are an ok
  * pair's, its surge is drawn towards the coincidence. */
 static int coincidence_only(const nav_ctx *ctx, int verdict, const sasnav_navigate_pair *np)
 {
@@ -747,7 +747,7 @@ static int coincidence_only(const nav_ctx *ctx, int verdict, const sasnav_naviga
     double need = po->verdict_margin_compact > po->verdict_margin_min ? po->verdict_margin_compact
                                                                      : po->verdict_margin_min;
     return verdict == SASNAV_VERDICT_AMBIGUOUS && np->result.coincidence && np->result.margin >= need &&
-           np->resolution == SASNAV_RESOLVED_NONE && !np->eta_outlier;
+           np->resolution == SASNAV_RESOLVED_NONE;
 }
 
 /* Standard deviations of a pair's estimate in the smoother. */
@@ -808,15 +808,26 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* The eta-outlier rule (opts.eta_outlier): the first n consecutive pairs'
- * median final eta, and each "ok" pair far above it made "ambiguous" (its
- * first verdict too: the estimate is what is in doubt). Before the joint
- * choice, so that the motion model and the aiding may settle the pair.
- * On the paper-trajectory's speckle seabed the correct pairs of a run stay
- * within 1.5 times their run's median eta; on runs with a seabed feature
- * 20-28 dB above the rest (docs/validation.md, "A bright feature entering
- * the beam") correct pairs reach 2-4 times it, and so do the slipped pairs
- * and the pairs 3-6 mm off that the contrast gates pass. */
+/* Whether a pair's scene is speckle-like for the verdict: neither p's
+ * image nor q's is compact (the compact-scene rules did not apply). */
+static int speckle_like(const nav_ctx *ctx, const sasnav_navigate_pair *np)
+{
+    double c = np->result.contrast_q > np->result.contrast ? np->result.contrast_q : np->result.contrast;
+    return c <= ctx->opts->pair.verdict_contrast;
+}
+
+/* The eta-outlier rule (opts.eta_outlier): the median final eta of the
+ * first n consecutive pairs' usable estimates on speckle-like scenes, and
+ * each "ok" one of them far above it made "ambiguous" (its first verdict
+ * too: the estimate is what is in doubt). Before the joint choice, so
+ * that the motion model and the aiding may settle the pair. On the
+ * paper-trajectory's speckle seabed the correct pairs of a run stay within
+ * 1.5 times their run's median eta; on runs with a seabed feature 20-28
+ * dB above the rest (docs/validation.md, "An eta far above the run's")
+ * slipped pairs that no contrast gate caught reach 2-2.3 times it, as do
+ * some correct ones. Compact scenes have rules of their own (coincidence,
+ * margin) and etas that spread further among correct pairs (the simulated
+ * tank's): the rule leaves them out. */
 static int flag_eta_outliers(nav_ctx *ctx, sasnav_navigation *out, int n)
 {
     const sasnav_navigate_opts *o = ctx->opts;
@@ -830,7 +841,8 @@ static int flag_eta_outliers(nav_ctx *ctx, sasnav_navigation *out, int n)
     int m = 0;
     for (int j = 0; j < n; j++) {
         get_pair(ctx, j, np);
-        if (usable(np) && np->result.eta > 0 && isfinite(np->result.eta)) eta[m++] = np->result.eta;
+        if (usable(np) && speckle_like(ctx, np) && np->result.eta > 0 && isfinite(np->result.eta))
+            eta[m++] = np->result.eta;
     }
     if (m < ETA_OUTLIER_MIN_PAIRS) {
         free(eta);
@@ -844,7 +856,7 @@ static int flag_eta_outliers(nav_ctx *ctx, sasnav_navigation *out, int n)
     int rc = SASNAV_OK;
     for (int j = 0; j < n && !rc; j++) {
         get_pair(ctx, j, np);
-        if (!usable(np) || !(np->result.eta > line)) continue;
+        if (!usable(np) || !speckle_like(ctx, np) || !(np->result.eta > line)) continue;
         np->eta_outlier = 1;
         out->n_eta_outliers++;
         if (np->verdict == SASNAV_VERDICT_OK) np->verdict = np->first_verdict = SASNAV_VERDICT_AMBIGUOUS;
