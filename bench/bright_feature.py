@@ -12,7 +12,10 @@ Prints one line per run and a summary over the pairs:
   speckle pairs' usual yaw error), and those with status "ok";
 - the pairs whose compact-scene verdict came from q's image alone (p's
   contrast at most the gate, q's above it: `contrast`, `contrast_q`), and
-  the slips among them: what reading q's image adds to the verdict.
+  the slips among them: what reading q's image adds to the verdict;
+- the pairs over navigate's eta-outlier line (`eta_outlier`), and the
+  slips and other large errors among them;
+- the runs' |final sway error|: median, max, and how many within lambda/25.
 
 usage: python3 bench/bright_feature.py path/to/sasnav --seeds S0 N
            [--amplitude A] [--snr DB] [--dir DIR] [--threads T] [--gate G]
@@ -22,6 +25,7 @@ cores)
 import argparse
 import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -65,7 +69,9 @@ def main():
     a = ap.parse_args()
     d = a.dir or tempfile.mkdtemp()
     os.makedirs(d, exist_ok=True)
-    t = dict(pairs=0, ok=0, slips=0, unflagged=0, large=0, large_ok=0, by_q=0, by_q_slips=0, by_q_large=0)
+    t = dict(pairs=0, ok=0, slips=0, unflagged=0, large=0, large_ok=0, by_q=0, by_q_slips=0, by_q_large=0,
+             eta_out=0, eta_out_slips=0, eta_out_large=0)
+    finals = []
     print("disc amplitude %s, SNR %s dB, seeds %d..%d, runs in %s" % (a.amplitude, a.snr, a.seeds[0],
                                                                        a.seeds[0] + a.seeds[1] - 1, d))
     for s in range(a.seeds[0], a.seeds[0] + a.seeds[1]):
@@ -89,15 +95,25 @@ def main():
             t["by_q"] += by_q
             t["by_q_slips"] += by_q and slip
             t["by_q_large"] += by_q and large
+            eo = bool(p.get("eta_outlier", False))
+            t["eta_out"] += eo
+            t["eta_out_slips"] += eo and slip
+            t["eta_out_large"] += eo and large and not slip
             if slip or (large and ok):
-                line.append("%d-%d %s %+.1f mm %+.1e rad (c %.2f, q %.2f, eta %.2f)" % (
-                    p["p"], p["q"], p["status"], 1e3 * e["surge"], e["yaw"], c, cq, p["eta"]))
+                line.append("%d-%d %s %+.1f mm %+.1e rad (c %.2f, q %.2f, eta %.2f%s)" % (
+                    p["p"], p["q"], p["status"], 1e3 * e["surge"], e["yaw"], c, cq, p["eta"],
+                    ", eta outlier" if eo else ""))
+        finals.append(abs(nav["final_sway_error"]))
         print("seed %d: final sway %+.3f mm, %d flagged; %s" % (s, 1e3 * nav["final_sway_error"],
                                                                  nav["flagged_pairs"],
                                                                  "; ".join(line) if line else "-"))
     print("pairs %(pairs)d, ok %(ok)d; slips %(slips)d, unflagged %(unflagged)d; large errors %(large)d, "
           "of them ok %(large_ok)d; compact by q's image alone %(by_q)d (slips %(by_q_slips)d, "
-          "large %(by_q_large)d)" % t)
+          "large %(by_q_large)d); eta outliers %(eta_out)d (slips %(eta_out_slips)d, other large "
+          "%(eta_out_large)d)" % t)
+    if finals:
+        print("|final sway| median %.3f mm, max %.3f mm; within lambda/25 (0.2 mm) %d of %d" % (
+            1e3 * statistics.median(finals), 1e3 * max(finals), sum(f <= 2e-4 for f in finals), len(finals)))
     return 0
 
 
