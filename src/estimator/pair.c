@@ -1412,13 +1412,13 @@ int sasnav_pair_estimate_intervals(const sasnav_run *run, int p, int q,
                 rc = r2;
             else if (!r2 && again.verdict == SASNAV_VERDICT_OK) {
                 /* judged again with the first estimate's margin (its own
-                 * was infinite): kept only if still ok */
+                 * was infinite): on a scene compact by the new estimate's
+                 * contrasts that margin may be short of the compact one,
+                 * and the pair is then flagged */
                 sasnav_pair_result_carry(&out[s].result, &again);
                 sasnav_pair_rejudge(pair, &again);
-                if (again.verdict == SASNAV_VERDICT_OK) {
-                    out[s].result = again;
-                    out[s].tx_yaw_from_estimate = 1;
-                }
+                out[s].result = again;
+                out[s].tx_yaw_from_estimate = 1;
             }
         }
         sasnav_pair_destroy(pair);

@@ -1193,10 +1193,11 @@ static int second_pass(nav_ctx *ctx, int retry_flagged)
         if (rc || r.verdict != SASNAV_VERDICT_OK) continue; /* keep the first estimate */
         if (again) {
             /* judged again with the first estimate's margin (its own was
-             * infinite): kept only if still ok */
+             * infinite): on a scene compact by the new estimate's
+             * contrasts that margin may be short of the compact one, and
+             * the pair is then flagged */
             sasnav_pair_result_carry(&np->result, &r);
             sasnav_pair_rejudge(est, &r);
-            if (r.verdict != SASNAV_VERDICT_OK) continue;
             np->result = r;
         } else { /* its own candidates; the time and work of both */
             r.seconds += np->result.seconds;

@@ -1078,11 +1078,10 @@ def estimate_pair(run, p=0, q=1, *, prior_start=None, lags=None, **opts):
                     check(L.sasnav_pair_set_data_run(pair, r, p, q, dp, dq, nominal, yaw2.ctypes.data_as(dptr)))
                     check(L.sasnav_pair_estimate_from(pair, res.error, ctypes.byref(again)))
                     if again.verdict == 0:
-                        # judged again with the first's margin: kept if still ok
+                        # judged again with the first's margin (as `sasnav pair`)
                         L.sasnav_pair_result_carry(ctypes.byref(res), ctypes.byref(again))
                         L.sasnav_pair_rejudge(pair, ctypes.byref(again))
-                        if again.verdict == 0:
-                            res = again
+                        res = again
     finally:
         L.sasnav_pair_destroy(pair)
     return _estimate_from_c(res, p, q, _pose(nominal), truth)
