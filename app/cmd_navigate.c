@@ -78,7 +78,7 @@ static const char *help =
     "                    pair's scene is compact for its verdict (default 4; 'inf':\n"
 "                    never; see 'sasnav pair --help')\n"
     "  --eta-outlier R   a pair whose eta exceeds R times the run's median pair\n"
-    "                    eta is 'ambiguous' at best (default 1.8; > 1, or 'inf':\n"
+    "                    eta is 'ambiguous' at best (default 1.6; > 1, or 'inf':\n"
     "                    off; needs 6 pairs; docs/estimator.md, \"Verdict\")\n"
     "  --final C         each pair's final-stage criterion: auto (default), eta\n"
     "                    or joint (see 'sasnav pair --help')\n"

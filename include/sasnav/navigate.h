@@ -177,7 +177,7 @@ typedef struct {
                                  whose scene differs (a bright feature on
                                  one ping's beam flank; docs/navigation.md,
                                  "Pairs whose eta stands out from the
-                                 run's"). Default 1.8; must be > 1; +inf:
+                                 run's"). Default 1.6; must be > 1; +inf:
                                  off */
     int nthreads;             /* OpenMP threads of the estimators (0 = OpenMP
                                  default); copied into pair and dpca */

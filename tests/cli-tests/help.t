@@ -307,7 +307,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       pair's scene is compact for its verdict (default 4; 'inf':
                       never; see 'sasnav pair --help')
     --eta-outlier R   a pair whose eta exceeds R times the run's median pair
-                      eta is 'ambiguous' at best (default 1.8; > 1, or 'inf':
+                      eta is 'ambiguous' at best (default 1.6; > 1, or 'inf':
                       off; needs 6 pairs; docs/estimator.md, "Verdict")
     --final C         each pair's final-stage criterion: auto (default), eta
                       or joint (see 'sasnav pair --help')
