@@ -596,6 +596,20 @@ static void check_lags(void)
     sasnav_run_free(run);
 }
 
+/* An estimator of the default system with a small uniform array (8
+ * elements of 5 cm) and a 9-11 m window, for checks that need one but no
+ * data. */
+static int small_pair(const sasnav_pair_opts *o, sasnav_pair **pr)
+{
+    sasnav_system sys;
+    sasnav_system_default(&sys);
+    sasnav_array a;
+    sasnav_array_uniform(&a, 8, 0.05, 0.05, 0.05);
+    sasnav_window w;
+    sasnav_window_for_ranges(&sys, 9.0, 11.0, 8, &w);
+    return sasnav_pair_create(&sys, &a, &w, o, pr);
+}
+
 /* Option rules in the library (they were the CLI's alone): each bad option
  * or combination refused with SASNAV_ERR_ARG and a message naming it; the
  * defaults pass; coarse iterations above the final ones are lowered. */
@@ -635,17 +649,11 @@ static void check_opts_rules(void)
               "case %d should be refused naming '%s': %s", c, says[c], sasnav_last_error());
     }
     /* coarse_k = 5 > k = 3: created, with coarse_k lowered to 3 */
-    sasnav_system sys;
-    sasnav_system_default(&sys);
-    sasnav_array a;
-    sasnav_array_uniform(&a, 8, 0.05, 0.05, 0.05);
-    sasnav_window w;
-    sasnav_window_for_ranges(&sys, 9.0, 11.0, 8, &w);
     sasnav_pair_default_opts(&o);
     o.k = 3;
     o.coarse_k = 5;
     sasnav_pair *pr = NULL;
-    CHECK(sasnav_pair_create(&sys, &a, &w, &o, &pr) == SASNAV_OK, "create: %s", sasnav_last_error());
+    CHECK(small_pair(&o, &pr) == SASNAV_OK, "create: %s", sasnav_last_error());
     if (pr) CHECK(sasnav_pair_options(pr)->coarse_k == 3, "coarse_k %d, expected 3",
                   sasnav_pair_options(pr)->coarse_k);
     sasnav_pair_destroy(pr);
@@ -998,16 +1006,10 @@ static void check_joint(void)
  * multi-transmitter pair without a gyro. Needs no data. */
 static void check_rejudge(void)
 {
-    sasnav_system sys;
-    sasnav_system_default(&sys);
-    sasnav_array a;
-    sasnav_array_uniform(&a, 8, 0.05, 0.05, 0.05);
-    sasnav_window w;
-    sasnav_window_for_ranges(&sys, 9.0, 11.0, 8, &w);
     sasnav_pair_opts o;
     sasnav_pair_default_opts(&o);
     sasnav_pair *pr = NULL;
-    CHECK_OK(sasnav_pair_create(&sys, &a, &w, &o, &pr));
+    CHECK_OK(small_pair(&o, &pr));
     if (!pr) return;
     const sasnav_pair_opts *po = sasnav_pair_options(pr);
     double m_min = po->verdict_margin_min, m_cpt = po->verdict_margin_compact, gate = po->verdict_contrast;
