@@ -143,6 +143,8 @@ fi
 [ $? -eq 2 ] || fail "--stride without --virtual-array: not a usage error"
 "$CLI" navigate "$T/run.h5" --virtual-array 4 --method dpca -o "$T/x.h5" > /dev/null 2>&1
 [ $? -eq 2 ] || fail "--virtual-array with --method: not a usage error"
+"$CLI" navigate "$T/run.h5" --virtual-array 4 --eta-outlier 2 -o "$T/x.h5" > /dev/null 2>&1
+[ $? -eq 2 ] || fail "--virtual-array with --eta-outlier (a rule over consecutive pairs): not a usage error"
 "$CLI" navigate "$T/run.h5" --virtual-array 200 -o "$T/x.h5" > /dev/null 2>&1
 [ $? -eq 2 ] || fail "--virtual-array 200: not a usage error"
 "$CLI" navigate "$T/run.h5" --virtual-array 2 -o "$T/x.h5" > /dev/null 2> "$T/few.err"

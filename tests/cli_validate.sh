@@ -39,7 +39,12 @@ if "$CLI" validate "$T/tank.h5" --fix-yaw --surge-sigma 0.025 --k-min 7 --k 2 --
     ls "$T/val" | grep -q 'tmp' && fail "temporary files left in the output directory"
     grep -q "Surge prior (--surge-sigma): 0.025 m" "$T/val/report.md" || fail "report.md does not state the surge prior"
     grep -q '"flagged_pairs"' "$T/val.json" || fail "JSON lacks \"flagged_pairs\""
-    head -n 1 "$T/val/pairs.csv" | grep -q ',status,verdict$' || fail "pairs.csv lacks the verdict column"
+    head -n 1 "$T/val/pairs.csv" | grep -q ',eta,eta_outlier,status,verdict$' ||
+        fail "pairs.csv lacks the eta, eta_outlier or verdict columns"
+    # eta a number in [0, 10], eta_outlier 0 or 1 (columns 5 and 4 from the end)
+    tail -n +2 "$T/val/pairs.csv" |
+        awk -F, '!($(NF-3) >= 0 && $(NF-3) <= 10) || $(NF-2) !~ /^[01]$/ { bad = 1 } END { exit bad }' ||
+        fail "pairs.csv: an eta or eta_outlier value out of its range"
     # every pair's verdict is one of the estimator's names
     tail -n +2 "$T/val/pairs.csv" | awk -F, '$NF !~ /^(ok|ambiguous|failed|no_overlap)$/ { bad = 1 } END { exit bad }' ||
         fail "pairs.csv holds a verdict that is not a verdict name"

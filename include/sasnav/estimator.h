@@ -548,8 +548,11 @@ typedef struct {
                                     gyro whose "ok" first estimate gave the
                                     transmitters' turn
                                     (sasnav_run_tx_yaw_from_estimate), and
-                                    result is the "ok" estimate made again
-                                    with it */
+                                    result is the estimate made again with
+                                    it, its verdict judged with the first
+                                    estimate's margin (sasnav_pair_rejudge:
+                                    "ambiguous" where that margin is short
+                                    of a compact scene's) */
 } sasnav_pair_interval;
 
 /* Estimates the motion error of ping q relative to ping p of `run` in n
@@ -564,7 +567,8 @@ typedef struct {
  * is the navigation's, motion_lag does not apply), with the gyro's
  * transmitter yaw when the run has one; without a gyro an "ok" estimate
  * gives the transmitters' turn (sasnav_run_tx_yaw_from_estimate) and is
- * made again from itself with it (kept when that is "ok" too:
+ * made again from itself with it (kept when that estimate is "ok" on its
+ * own, then judged again with the first's margin:
  * out[s].tx_yaw_from_estimate). The nominal displacement comes
  * from run->nav. Returns
  * SASNAV_OK when every interval was attempted (each interval's own status

@@ -169,8 +169,10 @@ typedef struct {
                                  pair.verdict_contrast) whose final eta
                                  exceeds this multiple of the median eta of
                                  the run's such pairs (usable subspace
-                                 estimates, at least 6) is "ambiguous" at
-                                 best: on one run the pairs share the
+                                 estimates, "ok" or "ambiguous", at least
+                                 6; their etas before the resolution) is
+                                 "ambiguous" at best (also without the
+                                 resolution): on one run the pairs share the
                                  system, the noise and the seabed
                                  statistics, so an eta far above theirs
                                  marks an estimate off the truth, or one
@@ -267,7 +269,9 @@ typedef struct {
     int verdict;               /* sasnav_verdict of the estimate in `result`
                                   after the resolution (an estimate chosen
                                   or confirmed by the aiding is "ok") */
-    int first_verdict;         /* the estimator's verdict before it */
+    int first_verdict;         /* the verdict before the resolution: the
+                                  estimator's, or "ambiguous" for an "ok"
+                                  estimate the eta-outlier rule marked */
     int resolution;            /* sasnav_resolution */
     sasnav_pose aiding;        /* aiding measurement of the motion error */
     sasnav_pose aiding_sigma;  /* its standard deviations (+inf: none) */
@@ -275,9 +279,10 @@ typedef struct {
                                   is built from) */
     sasnav_pair_result first_result; /* the estimate before the resolution */
     int first_status;          /* its status */
-    int eta_outlier;           /* 1: its eta exceeds opts.eta_outlier x the
-                                  run's median (its verdict is then
-                                  "ambiguous" at best) */
+    int eta_outlier;           /* 1: its eta before the resolution
+                                  (first_result.eta) exceeds
+                                  opts.eta_outlier x the run's median (its
+                                  verdict is then "ambiguous" at best) */
 } sasnav_navigate_pair;
 
 /* Output of sasnav_navigate; release the arrays with sasnav_navigation_free. */
@@ -335,11 +340,13 @@ struct sasnav_navigation {
                                      turned by the yaw from the pairs' own
                                      first estimates (opts.tx_yaw) and its
                                      ok consecutive pairs estimated again */
-    double eta_median;            /* median final eta of the usable
-                                     consecutive subspace estimates on
-                                     speckle-like scenes (NaN: another
-                                     method, fewer than 6, or
-                                     opts.eta_outlier off) */
+    double eta_median;            /* median final eta (before the
+                                     resolution) of the consecutive pairs
+                                     the eta-outlier rule reads: usable
+                                     subspace estimates, "ok" or
+                                     "ambiguous", on speckle-like scenes
+                                     (NaN: another method, fewer than 6,
+                                     or opts.eta_outlier off) */
     int n_eta_outliers;           /* consecutive pairs over opts.eta_outlier x
                                      eta_median */
 };

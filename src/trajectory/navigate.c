@@ -808,21 +808,27 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Whether a pair's scene is speckle-like for the verdict: neither p's
- * image nor q's is compact (the compact-scene rules did not apply). */
-static int speckle_like(const nav_ctx *ctx, const sasnav_navigate_pair *np)
+/* Whether a pair takes part in the eta-outlier rule: a usable estimate
+ * whose verdict is "ok" or "ambiguous" (not failed), with a finite eta, on
+ * a speckle-like scene for the verdict (neither p's image nor q's compact:
+ * the compact-scene rules did not apply). Read before the resolution,
+ * where result is the first estimate (first_result). */
+static int eta_rule_pair(const nav_ctx *ctx, const sasnav_navigate_pair *np)
 {
-    double c = np->result.contrast_q > np->result.contrast ? np->result.contrast_q : np->result.contrast;
-    return c <= ctx->opts->pair.verdict_contrast;
+    const sasnav_pair_result *r = &np->result;
+    double c = r->contrast_q > r->contrast ? r->contrast_q : r->contrast;
+    return usable(np) && (np->verdict == SASNAV_VERDICT_OK || np->verdict == SASNAV_VERDICT_AMBIGUOUS) &&
+           r->eta > 0 && isfinite(r->eta) && c <= ctx->opts->pair.verdict_contrast;
 }
 
 /* The eta-outlier rule (opts.eta_outlier): the median final eta of the
- * first n consecutive pairs' usable estimates on speckle-like scenes, and
- * each "ok" one of them far above it made "ambiguous" (its first verdict
- * too: the estimate is what is in doubt). Before the joint choice, so
- * that the motion model and the aiding may settle the pair. On the
+ * first n consecutive pairs that take part (eta_rule_pair), and each one
+ * of them far above it marked, and made "ambiguous" if it was "ok" (its
+ * first verdict too: the estimate is what is in doubt). Before the joint
+ * choice, so that the motion model and the aiding may settle the pair;
+ * also without the resolution (opts.resolve 0: the verdicts only). On the
  * paper-trajectory's speckle seabed the pairs of a run stayed within 1.4
- * times their run's median eta (525 pairs, 30 and 20 dB); on runs with a
+ * times their run's median eta (825 pairs, 30 and 20 dB); on runs with a
  * seabed feature 20-28 dB above the rest (docs/validation.md, "An eta far
  * above the run's") slipped pairs that no contrast gate caught reached
  * 1.6-2.3 times it, as did some correct ones. Compact scenes have rules of their own (coincidence,
@@ -841,8 +847,7 @@ static int flag_eta_outliers(nav_ctx *ctx, sasnav_navigation *out, int n)
     int m = 0;
     for (int j = 0; j < n; j++) {
         get_pair(ctx, j, np);
-        if (usable(np) && speckle_like(ctx, np) && np->result.eta > 0 && isfinite(np->result.eta))
-            eta[m++] = np->result.eta;
+        if (eta_rule_pair(ctx, np)) eta[m++] = np->result.eta;
     }
     if (m < ETA_OUTLIER_MIN_PAIRS) {
         free(eta);
@@ -856,7 +861,7 @@ static int flag_eta_outliers(nav_ctx *ctx, sasnav_navigation *out, int n)
     int rc = SASNAV_OK;
     for (int j = 0; j < n && !rc; j++) {
         get_pair(ctx, j, np);
-        if (!usable(np) || !speckle_like(ctx, np) || !(np->result.eta > line)) continue;
+        if (!eta_rule_pair(ctx, np) || !(np->result.eta > line)) continue;
         np->eta_outlier = 1;
         out->n_eta_outliers++;
         if (np->verdict == SASNAV_VERDICT_OK) np->verdict = np->first_verdict = SASNAV_VERDICT_AMBIGUOUS;

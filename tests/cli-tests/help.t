@@ -306,9 +306,11 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --compact-contrast C  the contrast of p's image or q's above which a
                       pair's scene is compact for its verdict (default 4; 'inf':
                       never; see 'sasnav pair --help')
-    --eta-outlier R   a pair whose eta exceeds R times the run's median pair
-                      eta is 'ambiguous' at best (default 1.6; > 1, or 'inf':
-                      off; needs 6 pairs; docs/estimator.md, "Verdict")
+    --eta-outlier R   a consecutive pair on a speckle-like scene (both
+                      contrasts at most the gate) whose eta exceeds R times
+                      the median of the run's such pairs is 'ambiguous' at
+                      best (default 1.6; > 1, or 'inf': off; needs 6 such
+                      pairs; docs/navigation.md)
     --final C         each pair's final-stage criterion: auto (default), eta
                       or joint (see 'sasnav pair --help')
     --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)
