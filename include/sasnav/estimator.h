@@ -484,6 +484,12 @@ void sasnav_pair_result_carry(const sasnav_pair_result *first, sasnav_pair_resul
  * Nothing on NULL. */
 void sasnav_pair_rejudge(const sasnav_pair *pair, sasnav_pair_result *result);
 
+/* The contrast the verdict's compact-scene gate reads: the larger of
+ * `result`'s contrast (p's image) and contrast_q (q's at the estimate); a
+ * scene is compact for the verdict where it exceeds
+ * opts.verdict_contrast. 0 on NULL. */
+double sasnav_pair_result_contrast(const sasnav_pair_result *result);
+
 /* Without a gyro, the transmitters' turn between transmission and
  * reception from an estimated displacement between two pings: the turn
  * per metre of that displacement (theta / its length) times the distance

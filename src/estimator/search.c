@@ -1145,8 +1145,13 @@ static void phase_centres(const sasnav_pair *pr, int q, double *x)
  * beam"). */
 static int compact_verdict(const sasnav_pair *pr, const sasnav_pair_result *res)
 {
-    double c = res->contrast_q > res->contrast ? res->contrast_q : res->contrast;
-    return c > sasnav_pair_options(pr)->verdict_contrast;
+    return sasnav_pair_result_contrast(res) > sasnav_pair_options(pr)->verdict_contrast;
+}
+
+double sasnav_pair_result_contrast(const sasnav_pair_result *res)
+{
+    if (!res) return 0.0;
+    return res->contrast_q > res->contrast ? res->contrast_q : res->contrast;
 }
 
 static int at_coincidence(const sasnav_pair *pr, const sasnav_pair_result *res, double pc_spacing)

@@ -816,9 +816,8 @@ static int cmp_double(const void *a, const void *b)
 static int eta_rule_pair(const nav_ctx *ctx, const sasnav_navigate_pair *np)
 {
     const sasnav_pair_result *r = &np->result;
-    double c = r->contrast_q > r->contrast ? r->contrast_q : r->contrast;
     return usable(np) && (np->verdict == SASNAV_VERDICT_OK || np->verdict == SASNAV_VERDICT_AMBIGUOUS) &&
-           r->eta > 0 && isfinite(r->eta) && c <= ctx->opts->pair.verdict_contrast;
+           r->eta > 0 && isfinite(r->eta) && sasnav_pair_result_contrast(r) <= ctx->opts->pair.verdict_contrast;
 }
 
 /* The eta-outlier rule (opts.eta_outlier): the median final eta of the
