@@ -5,7 +5,8 @@
 # aiding` dead-reckons; `--no-aiding` ignores the aiding; a run without
 # aiding refuses --method aiding (exit 1, one message, no output); bad
 # --motion-sigma or --method is refused; a compact scene's flagged pairs
-# give one warning line each on stderr. (Exit statuses of usage errors: the
+# give one warning line each on stderr; the eta-outlier rule's median and
+# marks on an 8-ping run. (Exit statuses of usage errors: the
 # issue on the CLI's conventions.)
 # Usage: sh tests/cli_trust.sh path/to/sasnav
 set -u
@@ -129,6 +130,55 @@ for p in json.load(open(sys.argv[1]))["pairs"]:
     assert p["contrast"] > 4 and p["contrast_q"] > 4, (p["contrast"], p["contrast_q"])
     assert not (p["coincidence"] and p["status"] == "ok"), p
 EOF
+
+# The eta-outlier rule through the command line, with a median that is not
+# null: an 8-ping run (7 speckle-like pairs, at least the rule's 6) is
+# navigated with the default factor; the median that navigate reports must
+# be the one computed here from the pairs' etas (the pairs that take part:
+# usable, "ok" or "ambiguous" by the estimator, both contrasts at most the
+# verdict's gate 4). Then a factor between the largest and the second
+# largest ratio to that median: exactly the pair with the largest eta is
+# marked, "ambiguous", warned about and counted; the others stay as they
+# were.
+cat > "$T/eight.yaml" <<'EOF'
+preset: paper-trajectory
+trajectory: {n_pings: 8, x_start: -0.7, surge_rms: 0.003, sway_rms: 0.003, yaw_rms: 0.003}
+noise: {snr_db: inf}
+EOF
+"$CLI" simulate --config "$T/eight.yaml" -o "$T/eight.h5" 2> /dev/null || fail "simulate (8 pings)"
+"$CLI" navigate "$T/eight.h5" --k 2 --i 1 --range-extent 0.6 --json -o "$T/n8.h5" > "$T/n8.json" \
+    2> "$T/n8.err" || { cat "$T/n8.err" >&2; fail "navigate (8 pings)"; }
+F=$(python3 - "$T/n8.json" <<'EOF'
+import json, statistics, sys
+d = json.load(open(sys.argv[1]))
+part = [p for p in d["pairs"] if p["estimator"] in ("ok", "ambiguous") and
+        max(p["contrast"], p["contrast_q"]) <= 4]
+assert len(part) >= 6, len(part)
+med = statistics.median(p["eta"] for p in part)
+assert d["eta_median"] is not None and abs(d["eta_median"] - med) <= 1e-9 * med, (d["eta_median"], med)
+r = sorted(p["eta"] / med for p in part)
+assert r[-1] > r[-2], r
+print("%.6f" % (0.5 * (r[-1] + r[-2])))
+EOF
+) || fail "eta median through the CLI"
+if [ -n "${F:-}" ]; then
+    "$CLI" navigate "$T/eight.h5" --k 2 --i 1 --range-extent 0.6 --eta-outlier "$F" --json \
+        -o "$T/n8b.h5" > "$T/n8b.json" 2> "$T/n8b.err" || { cat "$T/n8b.err" >&2; fail "navigate --eta-outlier $F"; }
+    [ "$(grep -c "with an eta far above the run's" "$T/n8b.err")" -eq 1 ] ||
+        fail "--eta-outlier $F: not one warning: $(cat "$T/n8b.err")"
+    python3 - "$T/n8.json" "$T/n8b.json" <<'EOF' || fail "--eta-outlier $F: marks"
+import json, sys
+a, b = (json.load(open(f)) for f in sys.argv[1:])
+top = max(range(len(a["pairs"])), key=lambda j: a["pairs"][j]["eta"])
+assert b["eta_outliers"] == 1 and b["eta_median"] == a["eta_median"], (b["eta_outliers"], b["eta_median"])
+for j, (pa, pb) in enumerate(zip(a["pairs"], b["pairs"])):
+    assert pb["eta_outlier"] is (j == top), (j, pb["eta_outlier"])
+    if j == top:
+        assert pa["status"] == "ok" and pb["status"] == "ambiguous" and pb["first_status"] == "ambiguous", pb
+    else:
+        assert pb["status"] == pa["status"] and pb["estimate"] == pa["estimate"], (j, pa["status"], pb["status"])
+EOF
+fi
 
 # --eta-max sets the bound of the "failed" verdict: the same pairs, with a
 # bound below any eta they can reach, are all failed (warned, counted); a
