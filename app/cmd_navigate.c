@@ -14,12 +14,15 @@
 #include <string.h>
 #include <unistd.h>
 
+/* getopt value of --equalise (no short option) */
+#define OPT_EQUALISE 1001
+
 static const char *help =
     "usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]\n"
     "                       [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]\n"
     "                       [--cross-extent M] [--range-extent M] [--eta-max E] [--final C]\n"
     "                       [--search-grid G] [--coincidence F] [--compact-contrast C]\n"
-    "                       [--eta-outlier R] [--no-aiding] [--no-resolve]\n"
+    "                       [--eta-outlier R] [--equalise M] [--no-aiding] [--no-resolve]\n"
     "                       [--motion-sigma S,W,Y] [--speed-lags none|dvl|pairs]\n"
     "                       [--aiding-bias S,W,Y]\n"
     "                       [--threads N] [--gpu] [--json] [--checkpoint FILE]\n"
@@ -82,6 +85,9 @@ static const char *help =
     "                    the median of the run's such pairs is 'ambiguous' at\n"
     "                    best (default 1.6; > 1, or 'inf': off; needs 6 such\n"
     "                    pairs; docs/navigation.md)\n"
+    "  --equalise M      each pair's search weights the images by their smoothed\n"
+    "                    intensity on speckle-like scenes (default 0.05 m; 0:\n"
+    "                    off; see 'sasnav pair --help')\n"
     "  --final C         each pair's final-stage criterion: auto (default), eta\n"
     "                    or joint (see 'sasnav pair --help')\n"
     "  --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)\n"
@@ -291,6 +297,7 @@ static void print_json(const char *input, const sasnav_navigation *nav)
             json_object_set_new(o, "search_grid", json_string(sasnav_search_grid_name(np->result.search_grid)));
             json_object_set_new(o, "contrast", json_real(np->result.contrast));
             json_object_set_new(o, "contrast_q", json_real(np->result.contrast_q));
+            json_object_set_new(o, "equalised", json_boolean(np->result.equalised));
         }
         json_object_set_new(o, "candidates", candidates_json(&np->result));
         if (nav->aiding_used) {
@@ -525,7 +532,7 @@ int cmd_navigate(int argc, char **argv)
         {"gpu", no_argument, 0, 'g'},        {"eta-max", required_argument, 0, 'e'},
         {"final", required_argument, 0, 'c'},  {"search-grid", required_argument, 0, 'P'},
         {"coincidence", required_argument, 0, 'J'}, {"compact-contrast", required_argument, 0, 'Q'},
-        {"eta-outlier", required_argument, 0, 'O'},
+        {"eta-outlier", required_argument, 0, 'O'}, {"equalise", required_argument, 0, OPT_EQUALISE},
         {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     sasnav_navigate_opts no;
@@ -540,7 +547,7 @@ int cmd_navigate(int argc, char **argv)
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         /* Options of the pair navigation alone (refused with --virtual-array). */
-        if (strchr("mLyfAFUNBSRMCgePO", opt)) n_general++;
+        if (strchr("mLyfAFUNBSRMCgePO", opt) || opt == OPT_EQUALISE) n_general++;
         have_coinc |= opt == 'J';
         have_cc |= opt == 'Q';
         have_cross |= opt == 'X';
@@ -606,6 +613,10 @@ int cmd_navigate(int argc, char **argv)
         case 'O':
             if (cli_parse_nonneg_or_inf(optarg, &no.eta_outlier) || !(no.eta_outlier > 1))
                 return cli_usage("navigate", "--eta-outlier needs a factor > 1 (or inf)");
+            break;
+        case OPT_EQUALISE:
+            if (cli_parse_double(optarg, &no.pair.equalise) || !(no.pair.equalise >= 0 && no.pair.equalise <= 1))
+                return cli_usage("navigate", "--equalise needs a smoothing length in [0, 1] m (0: off)");
             break;
         case 'U':
             if (cli_parse_double(optarg, &no.pair.surge_sigma) || !(no.pair.surge_sigma >= 0))

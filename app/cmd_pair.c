@@ -17,7 +17,7 @@ static const char *help =
     "                   [--cross-extent M] [--range-extent M]\n"
     "                   [--no-global] [--search-grid G] [--subintervals N]\n"
     "                   [--eta-max E] [--coincidence F] [--compact-contrast C]\n"
-    "                   [--final C]\n"
+    "                   [--final C] [--equalise M]\n"
     "                   [--range R] [--lag-model fixed|motion] [--threads N] [--gpu]\n"
     "\n"
     "Estimates the motion error (displacement minus nominal) of ping q relative\n"
@@ -72,6 +72,13 @@ static const char *help =
     "                    which the scene is compact for the verdict (default 4;\n"
     "                    speckle about 1, simulated seabeds up to 3.9; 'inf':\n"
     "                    never; reported as 'contrast', 'contrast_q' in --json)\n"
+    "  --equalise M      on a scene speckle-like at the prior, the search weights\n"
+    "                    each pixel by the inverse square root of the images'\n"
+    "                    intensity smoothed over M metres, so that a feature far\n"
+    "                    brighter than the seabed does not lead it astray; the\n"
+    "                    final stage and the verdict's eta stay unweighted\n"
+    "                    (default 0.05; 0: off; 'equalised' in --json;\n"
+    "                    docs/estimator.md, \"An equalised search\")\n"
     "  --threads N       OpenMP threads\n"
     "  --gpu             the error evaluations on a CUDA GPU (builds configured\n"
     "                    with -DSASNAV_CUDA=ON; the same estimates to float\n"
@@ -119,13 +126,14 @@ int cmd_pair(int argc, char **argv)
         {"eta-max", required_argument, 0, 'e'}, {"help", no_argument, 0, 'h'},
         {"final", required_argument, 0, 'C'},   {"search-grid", required_argument, 0, 'f'},
         {"coincidence", required_argument, 0, 'c'}, {"compact-contrast", required_argument, 0, 'T'},
+        {"equalise", required_argument, 0, 'W'},
         {0, 0, 0, 0}};
     long p = 0, q = 1, k = 8, iters = 8, nsub = 1, threads = 0;
     int json = 0, no_global = 0, have_p = 0, have_q = 0, motion_lag = 0, fix_yaw = 0, gpu = 0,
         search_grid = SASNAV_SEARCH_AUTO;
     double prior[3] = {0, 0, 0}, range = NAN, box[3] = {NAN, NAN, NAN}, yaw_sigma = 0, cross_extent = 0,
            surge_sigma = 0, range_extent = 0, eta_max = 0, coincidence = NAN,
-           compact_contrast = NAN;
+           compact_contrast = NAN, equalise = NAN;
     int final_c = SASNAV_FINAL_AUTO;
     int opt;
     optind = 1;
@@ -167,6 +175,10 @@ int cmd_pair(int argc, char **argv)
         case 'T':
             if (cli_parse_nonneg_or_inf(optarg, &compact_contrast))
                 return cli_usage("pair", "--compact-contrast needs a contrast >= 0 (or inf)");
+            break;
+        case 'W':
+            if (cli_parse_double(optarg, &equalise) || !(equalise >= 0 && equalise <= 1))
+                return cli_usage("pair", "--equalise needs a smoothing length in [0, 1] m (0: off)");
             break;
         case 'C':
             final_c = sasnav_final_criterion_parse(optarg);
@@ -241,6 +253,7 @@ int cmd_pair(int argc, char **argv)
     if (eta_max > 0) po.verdict_eta_max = eta_max;
     if (!isnan(coincidence)) po.verdict_coincidence = coincidence;
     if (!isnan(compact_contrast)) po.verdict_contrast = compact_contrast;
+    if (!isnan(equalise)) po.equalise = equalise;
     po.final_criterion = final_c;
     if (sasnav_pair_opts_check(&po)) {
         sasnav_run_free(run);
@@ -308,6 +321,7 @@ int cmd_pair(int argc, char **argv)
         json_object_set_new(root, "search_grid", json_string(sasnav_search_grid_name(r0->search_grid)));
         json_object_set_new(root, "contrast", json_real(r0->contrast));
         json_object_set_new(root, "contrast_q", json_real(r0->contrast_q));
+        json_object_set_new(root, "equalised", json_boolean(r0->equalised));
         json_object_set_new(root, "overlap", json_real(r0->overlap));
         json_object_set_new(root, "ambiguity", json_real(r0->ambiguity));
         json_object_set_new(root, "evaluations", json_integer(r0->evaluations));
@@ -398,13 +412,14 @@ int cmd_pair(int argc, char **argv)
                r->evaluations_eta, r->applications, r->seconds,
                r->status == SASNAV_OK ? "converged" : sasnav_strerror(r->status));
         printf("time per stage: global %.2f s (%ld applications), zeta %.2f s (%ld), eta %.2f s (%ld), "
-               "final %.2f s (%ld, %d evaluations, criterion %s); search grid %s; contrast %.2f (q %.2f)\n",
+               "final %.2f s (%ld, %d evaluations, criterion %s); search grid %s%s; contrast %.2f (q %.2f)\n",
                r->seconds_global, r->applications_global, r->seconds_zeta, r->applications_zeta,
                r->seconds_eta, r->applications_eta, r->seconds_final, r->applications_final,
                r->evaluations_final,
                r->joint_rejected ? "eta, the joint misfit's estimate rejected"
                                  : sasnav_final_criterion_name(r->final_criterion),
-               sasnav_search_grid_name(r->search_grid), r->contrast, r->contrast_q);
+               sasnav_search_grid_name(r->search_grid), r->equalised ? ", equalised" : "", r->contrast,
+               r->contrast_q);
         for (int kc = 0; kc < r->n_candidates; kc++) {
             const sasnav_pair_candidate *c = &r->candidates[kc];
             char scan_s[32];

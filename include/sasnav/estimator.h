@@ -225,6 +225,25 @@ typedef struct {
                               whose surge errors the joint stage doubled;
                               never with omnidirectional elements; 0:
                               always, the rule before) */
+    double equalise;          /* m (default 0.05; 0: off): on a scene
+                              speckle-like at the prior (the intensity
+                              contrast of p's reconstruction and of q's
+                              placed at the prior both at most
+                              verdict_contrast), the search stages'
+                              criteria (zeta and eta on the search grid:
+                              global, zeta and first eta stages, the slip
+                              check) weight each pixel by 1 / sqrt(S +
+                              0.1 mean S), S the two images' intensity
+                              smoothed by a Gaussian of this many metres,
+                              so that a feature 20 dB or more above the
+                              seabed, seen by one ping's beam and hardly
+                              by the other's, does not lead the search
+                              into a wrong basin; the chosen candidate
+                              then goes through an unweighted eta stage,
+                              and the final stage, the verdict's eta and
+                              the overlap are never weighted
+                              (result.equalised; docs/estimator.md, "An
+                              equalised search") */
 } sasnav_pair_opts;
 
 /* The final stage's criterion (sasnav_pair_opts.final_criterion):
@@ -377,6 +396,9 @@ typedef struct {
                                   (a bright feature that q's beam sees and
                                   p's hardly: docs/validation.md); 0 where
                                   no estimate was made */
+    int equalised;             /* 1: the search's criteria were weighted
+                                  (opts.equalise on a scene speckle-like at
+                                  the prior) */
 } sasnav_pair_result;
 
 typedef struct sasnav_pair sasnav_pair;

@@ -63,6 +63,7 @@ void sasnav_pair_default_opts(sasnav_pair_opts *o)
     o->joint_contrast_max = 5.0;
     o->verdict_contrast = 4.0;
     o->joint_coverage_min = 0.5;
+    o->equalise = 0.05;
 }
 
 static double nrm2(const sasnav_cfloat *v, size_t n)
@@ -98,6 +99,7 @@ static void level_free(pair_level *lv)
     free(lv->mod_q);
     free(lv->blur_tmp);
     free(lv->window);
+    free(lv->eqw);
 #pragma omp critical(sasnav_fftw_planner)
     {
         if (lv->xc_fwd_p) fftwf_destroy_plan(lv->xc_fwd_p);
@@ -142,8 +144,12 @@ static int level_init(sasnav_pair *pr, pair_level *lv, double pixel, int k, int 
     lv->mod_q = malloc(sizeof(double) * np);
     lv->blur_tmp = malloc(sizeof(double) * np);
     lv->window = malloc(sizeof(float) * np);
+    /* the search's levels (0, 1) hold the equalising weights */
+    int equalises = o->equalise > 0 && lv - pr->level < 2;
+    if (equalises) lv->eqw = malloc(sizeof(double) * np);
     if (!lv->rho_p || !lv->rho_q || !lv->psi_p || !lv->psi_q || !lv->tmp || !lv->data_tmp ||
-        !lv->cgls_work || !lv->tmp2 || !lv->data_tmp2 || !lv->cgls_work2 || !lv->mod_p || !lv->mod_q || !lv->blur_tmp || !lv->window)
+        !lv->cgls_work || !lv->tmp2 || !lv->data_tmp2 || !lv->cgls_work2 || !lv->mod_p || !lv->mod_q || !lv->blur_tmp || !lv->window ||
+        (equalises && !lv->eqw))
         return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for the estimator");
     /* Correlation buffers zero-padded to twice the grid (linear, not
      * circular, correlation); plans made once here. */
@@ -195,7 +201,50 @@ static double window_contrast(const pair_level *lv, const sasnav_cfloat *rho)
     return mean > 0 && var > 0 ? sqrt(var) / mean : 0.0;
 }
 
-/* p's reconstruction on the level's grid, with the level's iterations. */
+static void blur_map(const sasnav_grid *g, double sigma_x, double sigma_y, double *f, double *tmp);
+static int place_q(sasnav_pair *pr, int level, sasnav_pose error);
+
+/* Floor of the equalising weights' intensity, as a fraction of its mean
+ * over the error window: at most 1 / sqrt(0.1) = 3.2 times the weight of
+ * a pixel of mean intensity where the seabed is dark. */
+#define EQUALISE_FLOOR 0.1
+
+/* The search's equalising weights of a level (opts.equalise): q's
+ * reconstruction at the prior, then w = 1 / sqrt(S + floor), S = |rho_p|^2
+ * + |rho_q|^2 smoothed by a Gaussian of opts.equalise metres (both axes),
+ * floor = EQUALISE_FLOOR x the window's mean of S; and q's contrast there
+ * (the gate). Leaves rho_q as q's image at the prior (a scratch buffer:
+ * each evaluation makes its own). */
+static int level_weights(sasnav_pair *pr, pair_level *lv)
+{
+    int level = (int)(lv - pr->level);
+    int rc = place_q(pr, level, pr->opts.prior);
+    if (rc) return rc;
+    sasnav_cgls_opts co = {lv->k, pr->opts.tikhonov};
+    rc = sasnav_cgls(ops_owner(pr, level)->op_q, pr->data_q, &co, lv->rho_q, lv->cgls_work);
+    pr->applications += cgls_cost(lv->k);
+    if (rc) return rc;
+    lv->last_valid = 0;
+    lv->contrast_q0 = window_contrast(lv, lv->rho_q);
+    for (size_t j = 0; j < lv->np; j++) {
+        double a = crealf(lv->rho_p[j]), b = cimagf(lv->rho_p[j]);
+        double c = crealf(lv->rho_q[j]), d = cimagf(lv->rho_q[j]);
+        lv->eqw[j] = a * a + b * b + c * c + d * d;
+    }
+    blur_map(&lv->grid, pr->opts.equalise, pr->opts.equalise, lv->eqw, lv->blur_tmp);
+    double s = 0, w = 0;
+    for (size_t j = 0; j < lv->np; j++) {
+        s += lv->window[j] * lv->eqw[j];
+        w += lv->window[j];
+    }
+    double floor_ = EQUALISE_FLOOR * (w > 0 ? s / w : 0.0);
+    if (!(floor_ > 0)) floor_ = 1.0; /* nothing seen: weights uniform */
+    for (size_t j = 0; j < lv->np; j++) lv->eqw[j] = 1.0 / sqrt(lv->eqw[j] + floor_);
+    return SASNAV_OK;
+}
+
+/* p's reconstruction on the level's grid, with the level's iterations
+ * (and the level's equalising weights). */
 static int level_rho_p(sasnav_pair *pr, pair_level *lv)
 {
     const pair_level *src = pr->twin_of ? &pr->twin_of->level[lv - pr->level] : NULL;
@@ -203,6 +252,8 @@ static int level_rho_p(sasnav_pair *pr, pair_level *lv)
         memcpy(lv->rho_p, src->rho_p, sizeof(sasnav_cfloat) * lv->np);
         lv->rho_p_norm = src->rho_p_norm;
         lv->contrast = src->contrast;
+        if (lv->eqw && src->eqw) memcpy(lv->eqw, src->eqw, sizeof(double) * lv->np);
+        lv->contrast_q0 = src->contrast_q0;
         return SASNAV_OK;
     }
     sasnav_cgls_opts co = {lv->k, pr->opts.tikhonov};
@@ -215,7 +266,7 @@ static int level_rho_p(sasnav_pair *pr, pair_level *lv)
         return sasnav_set_error(SASNAV_ERR_NO_OVERLAP,
                                 "ping p sees nothing on the estimation grid (range %g m): "
                                 "check the range of interest", pr->opts.range);
-    return SASNAV_OK;
+    return lv->eqw ? level_weights(pr, lv) : SASNAV_OK;
 }
 
 static int level_make_ops(sasnav_pair *pr, pair_level *lv, double xcentre, pair_level *share)
@@ -314,6 +365,8 @@ int sasnav_pair_opts_check(const sasnav_pair_opts *o)
     if (!(o->joint_contrast_max >= 0)) OPT_FAIL("joint_contrast_max %g must be >= 0", o->joint_contrast_max);
     if (!(o->joint_coverage_min >= 0) || !isfinite(o->joint_coverage_min))
         OPT_FAIL("joint_coverage_min %g must be finite and >= 0", o->joint_coverage_min);
+    if (!(o->equalise >= 0) || !isfinite(o->equalise))
+        OPT_FAIL("equalise %g must be finite and >= 0 (0: off)", o->equalise);
     if (!(o->verdict_contrast >= 0))
         OPT_FAIL("verdict_contrast %g must be >= 0 (inf: no compact-scene verdict)", o->verdict_contrast);
     if (!(o->joint_eta_ratio >= 1))
@@ -484,6 +537,12 @@ static int make_levels(sasnav_pair *pr)
     double xc = 0.5 * pr->nominal.x;
     for (int v = 0; v < PAIR_LEVELS && !rc; v++)
         rc = level_make_ops(pr, &pr->level[v], xc, v == 2 ? &pr->level[1] : NULL);
+    /* The search is equalised on scenes speckle-like at the prior by the
+     * full-pixel images (level 1) of both pings. */
+    const pair_level *l1 = &pr->level[1];
+    pr->equalised = !rc && pr->level[0].eqw && l1->eqw &&
+                    (l1->contrast > l1->contrast_q0 ? l1->contrast : l1->contrast_q0) <= pr->opts.verdict_contrast;
+    pr->eq_suspended = 0;
     pr->ready = (rc == 0);
     return rc;
 }
@@ -992,6 +1051,16 @@ int sasnav_pair_eval(sasnav_pair *pr, sasnav_pose error, int level, int blurred,
     }
     double np_ = nrm2(lv->psi_p, np), nq_ = nrm2(lv->psi_q, np);
     double ov = np_ / lv->rho_p_norm;
+    /* The search's equalising weights (opts.equalise) after the overlap,
+     * which stays the unweighted share of p's image. */
+    if (lv->eqw && pr->equalised && !pr->eq_suspended) {
+        for (size_t j = 0; j < np; j++) {
+            lv->psi_p[j] *= (float)lv->eqw[j];
+            lv->psi_q[j] *= (float)lv->eqw[j];
+        }
+        np_ = nrm2(lv->psi_p, np);
+        nq_ = nrm2(lv->psi_q, np);
+    }
     double nrm = 1.0;
     switch (pr->opts.norm) {
     case SASNAV_NORM_P: nrm = np_; break;
@@ -1148,6 +1217,16 @@ int pair_image_shift(sasnav_pair *pr, int level, sasnav_pose error, double *sx, 
 }
 
 size_t pair_level_points(const sasnav_pair *pr, int level) { return pr->level[level].np; }
+
+void pair_equalise_suspend(sasnav_pair *pr, int on)
+{
+    if (!pr->equalised || pr->eq_suspended == on) return;
+    pr->eq_suspended = on;
+    for (int v = 0; v < PAIR_LEVELS; v++) {
+        pr->level[v].n_kept = pr->level[v].next_kept = 0;
+        pr->level[v].last_valid = 0;
+    }
+}
 
 /* A twin of pr (one thread, the same data and geometry), or NULL. */
 static sasnav_pair *make_twin(sasnav_pair *pr)

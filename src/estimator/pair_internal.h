@@ -50,6 +50,11 @@ typedef struct {
     sasnav_cfloat *tmp2, *data_tmp2, *cgls_work2;
     double *mod_p, *mod_q, *blur_tmp;
     float *window;
+    /* The search's equalising weights (opts.equalise; levels 0 and 1,
+     * NULL elsewhere or when off) and the contrast of q's reconstruction
+     * at the prior (their gate, with p's). */
+    double *eqw;
+    double contrast_q0;
     double rho_p_norm;
     double contrast;         /* of |rho_p|^2 over the window (std / mean) */
     /* 2-D cross-correlation of |rho_p| and |rho_q| (global stage). */
@@ -86,6 +91,10 @@ struct sasnav_pair {
     sasnav_cfloat *data_p, *data_q;
     sasnav_pose nominal;
     int ready;
+    /* equalised: the search's criteria are weighted (levels 0 and 1 hold
+     * eqw and the scene is speckle-like at the prior); eq_suspended: not
+     * now (the unweighted eta stage before the final one). */
+    int equalised, eq_suspended;
     pair_level level[PAIR_LEVELS];
     long applications;
     int evaluations;
@@ -124,6 +133,11 @@ int pair_image_shift(sasnav_pair *pr, int level, sasnav_pose error, double *sx, 
 int pair_eval_residual(sasnav_pair *pr, sasnav_pose error, int level, int use_eta,
                        sasnav_cfloat *r, double *f);
 size_t pair_level_points(const sasnav_pair *pr, int level);
+
+/* Suspends (on = 1) or restores (0) the search's equalising weights
+ * (opts.equalise) and forgets the kept evaluations, which were made with
+ * the other criterion. Nothing where the pair is not equalised. */
+void pair_equalise_suspend(sasnav_pair *pr, int on);
 
 /* The joint misfit (docs/estimator.md, "A joint-misfit final stage") at
  * the hypothesised error on the final level's grid: one scene s explains

@@ -230,10 +230,11 @@ static uint64_t options_digest(const sasnav_run *run, const sasnav_navigate_opts
                                po->surge_sigma, po->grid_step.x, po->grid_step.y, po->grid_step.theta,
                                po->error_extent, po->error_taper, po->min_overlap,
                                po->verdict_eta_max, po->verdict_margin_min, po->op.tolerance,
-                               po->op.oversampling, po->verdict_coincidence, po->verdict_margin_compact, po->verdict_contrast, po->joint_coverage_min, 0, 0};
+                               po->op.oversampling, po->verdict_coincidence, po->verdict_margin_compact, po->verdict_contrast, po->joint_coverage_min, po->equalise, 0};
         h = sasnav_hash_doubles(h, pd, 31);
         /* the final stage's criterion and the joint misfit's settings (the
-         * verdict's contrast gate and the coverage rule are in pd above); keys of
+         * verdict's contrast gate, the coverage rule and the equalising length
+         * are in pd above); keys of
          * earlier versions, which left them out, were made with the
          * defaults and stay theirs */
         sasnav_pair_opts def;

@@ -128,6 +128,10 @@ void sasnav_virtual_default_opts(sasnav_virtual_opts *opts)
      * off, their verdict is the margin's (pair.verdict_coincidence turns
      * it on; it then tests the groups' own phase centres). */
     opts->pair.verdict_coincidence = 0.0;
+    /* The equalised search was measured on the paper system's seabeds
+     * (docs/estimator.md, "An equalised search"), not on virtual arrays:
+     * off (their steps as before it). */
+    opts->pair.equalise = 0.0;
     opts->iterations = 2;
     opts->nthreads = 0;
 }

@@ -103,7 +103,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                      [--cross-extent M] [--range-extent M]
                      [--no-global] [--search-grid G] [--subintervals N]
                      [--eta-max E] [--coincidence F] [--compact-contrast C]
-                     [--final C]
+                     [--final C] [--equalise M]
                      [--range R] [--lag-model fixed|motion] [--threads N] [--gpu]
   
   Estimates the motion error (displacement minus nominal) of ping q relative
@@ -158,6 +158,13 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       which the scene is compact for the verdict (default 4;
                       speckle about 1, simulated seabeds up to 3.9; 'inf':
                       never; reported as 'contrast', 'contrast_q' in --json)
+    --equalise M      on a scene speckle-like at the prior, the search weights
+                      each pixel by the inverse square root of the images'
+                      intensity smoothed over M metres, so that a feature far
+                      brighter than the seabed does not lead it astray; the
+                      final stage and the verdict's eta stay unweighted
+                      (default 0.05; 0: off; 'equalised' in --json;
+                      docs/estimator.md, "An equalised search")
     --threads N       OpenMP threads
     --gpu             the error evaluations on a CUDA GPU (builds configured
                       with -DSASNAV_CUDA=ON; the same estimates to float
@@ -248,7 +255,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                          [--k K] [--i I] [--yaw-sigma S | --fix-yaw] [--surge-sigma S]
                          [--cross-extent M] [--range-extent M] [--eta-max E] [--final C]
                          [--search-grid G] [--coincidence F] [--compact-contrast C]
-                         [--eta-outlier R] [--no-aiding] [--no-resolve]
+                         [--eta-outlier R] [--equalise M] [--no-aiding] [--no-resolve]
                          [--motion-sigma S,W,Y] [--speed-lags none|dvl|pairs]
                          [--aiding-bias S,W,Y]
                          [--threads N] [--gpu] [--json] [--checkpoint FILE]
@@ -311,6 +318,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       the median of the run's such pairs is 'ambiguous' at
                       best (default 1.6; > 1, or 'inf': off; needs 6 such
                       pairs; docs/navigation.md)
+    --equalise M      each pair's search weights the images by their smoothed
+                      intensity on speckle-like scenes (default 0.05 m; 0:
+                      off; see 'sasnav pair --help')
     --final C         each pair's final-stage criterion: auto (default), eta
                       or joint (see 'sasnav pair --help')
     --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)

@@ -293,6 +293,7 @@ class PairOpts(Structure):  # estimator.h
         ("joint_eta_ratio", c_double),
         ("verdict_contrast", c_double),
         ("joint_coverage_min", c_double),
+        ("equalise", c_double),
     ]
 
 
@@ -346,6 +347,7 @@ class PairResult(Structure):  # estimator.h
         ("coincidence", c_int),
         ("contrast", c_double),
         ("contrast_q", c_double),
+        ("equalised", c_int),
     ]
 
 

@@ -924,7 +924,9 @@ class PairEstimate:
     verdict is then "ambiguous" at best); contrast, contrast_q: the intensity
     contrasts of p's reconstruction and of q's at the estimate, the larger of
     which decided between the speckle and the compact-scene rules (0 for
-    DPCA); candidates: list of Candidate; status: "ok" or the
+    DPCA); equalised: True where the search's criteria were weighted by the
+    images' smoothed intensity (pair option equalise, on a scene
+    speckle-like at the prior); candidates: list of Candidate; status: "ok" or the
     estimator's status text; result: the C struct (every field)."""
 
     p: int
@@ -952,6 +954,7 @@ class PairEstimate:
     coincidence: bool
     contrast: float
     contrast_q: float
+    equalised: bool
     result: C.PairResult = field(repr=False)
 
 
@@ -985,6 +988,7 @@ def _estimate_from_c(r, p, q, nominal, truth):
                         bool(r.coincidence),
                         r.contrast,
                         r.contrast_q,
+                        bool(r.equalised),
                         C.PairResult.from_buffer_copy(r))
 
 
