@@ -19,6 +19,11 @@ Prints one line per run and a summary over the pairs:
 
 usage: python3 bench/bright_feature.py path/to/sasnav --seeds S0 N
            [--amplitude A] [--snr DB] [--dir DIR] [--threads T] [--gate G]
+           [--navigate-args="ARGS"]
+(--navigate-args="...": more options of `sasnav navigate`, e.g.
+--navigate-args="--equalise 0" or "--eta-outlier inf", to compare with the
+defaults on the same runs in another DIR: the runs are simulated again, the
+same bits)
 (an existing DIR keeps its runs and navigations; about 15-30 s a run on two
 cores)
 """
@@ -35,7 +40,7 @@ SLIP_SURGE, SLIP_YAW = SPACING / 4, 2e-3
 LARGE_SURGE, LARGE_YAW = 3e-3, 5e-4
 
 
-def run_one(cli, d, amp, seed, snr, threads):
+def run_one(cli, d, amp, seed, snr, threads, extra=()):
     cfg = os.path.join(d, "disc.yaml")
     with open(cfg, "w") as f:
         f.write("preset: paper-trajectory\nscene: {disc_amplitude: %s}\n" % amp)
@@ -46,7 +51,7 @@ def run_one(cli, d, amp, seed, snr, threads):
             subprocess.run([cli, "simulate", "--config", cfg, "--seed", str(seed), "--snr", snr,
                             "-o", run], check=True, capture_output=True)
         nav = os.path.join(d, "nav_%d.h5" % seed)
-        r = subprocess.run([cli, "navigate", run, "--json", "-o", nav, "--threads", str(threads)],
+        r = subprocess.run([cli, "navigate", run, "--json", "-o", nav, "--threads", str(threads)] + list(extra),
                            check=True, capture_output=True, text=True)
         with open(js + ".tmp", "w") as f:
             f.write(r.stdout)
@@ -64,6 +69,7 @@ def main():
     ap.add_argument("--snr", default="30")
     ap.add_argument("--dir")
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--navigate-args", default="", help="more options of sasnav navigate")
     ap.add_argument("--gate", type=float, default=4.0,
                     help="the verdict's contrast gate the runs were made with (default %(default)s)")
     a = ap.parse_args()
@@ -75,7 +81,7 @@ def main():
     print("disc amplitude %s, SNR %s dB, seeds %d..%d, runs in %s" % (a.amplitude, a.snr, a.seeds[0],
                                                                        a.seeds[0] + a.seeds[1] - 1, d))
     for s in range(a.seeds[0], a.seeds[0] + a.seeds[1]):
-        nav = run_one(a.cli, d, a.amplitude, s, a.snr, a.threads)
+        nav = run_one(a.cli, d, a.amplitude, s, a.snr, a.threads, a.navigate_args.split())
         line = []
         for p in nav["pairs"]:
             e = p.get("error")

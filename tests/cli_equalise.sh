@@ -7,7 +7,7 @@
 # (`--equalise 0`) the search is led one basin off and the estimate is
 # passed "ok" 8.5 mm off in surge, beyond a quarter phase-centre spacing
 # (6.25 mm: a slip); with the default it is within 2 mm of the truth
-# (measured -0.21 mm on two threads, -0.39 on one; the pairs of these
+# (measured -0.39 mm, on one thread and two alike; the pairs of these
 # runs are 0.6-0.7 mm off at the median) and says it was equalised.
 # Bad values are usage errors (2) that write nothing.
 # Usage: sh tests/cli_equalise.sh path/to/sasnav

@@ -773,6 +773,9 @@ static void check_chain_paths(void)
     sasnav_pair_opts po;
     sasnav_pair_default_opts(&po);
     if (reduced) po.k = po.i = 2;
+    /* the level buffers hold the chains' images unweighted (the
+     * equalising weights, opts.equalise, multiply them after the chains) */
+    po.equalise = 0;
     po.nthreads = 1;
     sasnav_pair *one = make_pair_opts(run, &po);
     po.nthreads = 2;

@@ -228,8 +228,10 @@ typedef struct {
     double equalise;          /* m (default 0.05; 0: off): on a scene
                               speckle-like at the prior (the intensity
                               contrast of p's reconstruction and of q's
-                              placed at the prior both at most
-                              verdict_contrast), the search stages'
+                              placed at the prior both at most 4, the
+                              verdict's default gate; a constant, so
+                              that verdict_contrast does not move the
+                              estimates), the search stages'
                               criteria (zeta and eta on the search grid:
                               global, zeta and first eta stages, the slip
                               check) weight each pixel by 1 / sqrt(S +

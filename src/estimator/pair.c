@@ -209,6 +209,14 @@ static int place_q(sasnav_pair *pr, int level, sasnav_pose error);
  * a pixel of mean intensity where the seabed is dark. */
 #define EQUALISE_FLOOR 0.1
 
+/* The search is equalised where the full-pixel images of p and of q at the
+ * prior both have an intensity contrast of at most this: speckle-like
+ * seabeds (1.7-3.9 on the simulated ones), not a few bright reflectors
+ * (the tank's 6-13). The verdict's default compact gate, but a constant of
+ * its own: a verdict setting (opts.verdict_contrast) does not move the
+ * estimates. */
+#define EQUALISE_CONTRAST_MAX 4.0
+
 /* The search's equalising weights of a level (opts.equalise): q's
  * reconstruction at the prior, then w = 1 / sqrt(S + floor), S = |rho_p|^2
  * + |rho_q|^2 smoothed by a Gaussian of opts.equalise metres (both axes),
@@ -541,7 +549,7 @@ static int make_levels(sasnav_pair *pr)
      * full-pixel images (level 1) of both pings. */
     const pair_level *l1 = &pr->level[1];
     pr->equalised = !rc && pr->level[0].eqw && l1->eqw &&
-                    (l1->contrast > l1->contrast_q0 ? l1->contrast : l1->contrast_q0) <= pr->opts.verdict_contrast;
+                    (l1->contrast > l1->contrast_q0 ? l1->contrast : l1->contrast_q0) <= EQUALISE_CONTRAST_MAX;
     pr->eq_suspended = 0;
     pr->ready = (rc == 0);
     return rc;
@@ -1284,7 +1292,12 @@ int pair_workers(sasnav_pair *pr, int want, sasnav_pair **w)
     }
     if (n > 1 + pr->n_twins) n = 1 + pr->n_twins;
     if (n < 1) n = 1;
-    for (int t = 1; t < n; t++) w[t] = pr->twin[t - 1];
+    /* the workers evaluate pr's criterion: its equalising weights on or
+     * suspended as pr's are (pair_equalise_suspend) */
+    for (int t = 1; t < n; t++) {
+        w[t] = pr->twin[t - 1];
+        pair_equalise_suspend(w[t], pr->eq_suspended);
+    }
     return n;
 }
 
