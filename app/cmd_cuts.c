@@ -233,6 +233,9 @@ int cmd_cuts(int argc, char **argv)
     if (make_dir(dir)) return cli_fail("cuts", 0, "cannot create directory %s", dir);
     sasnav_pair_opts po;
     sasnav_pair_default_opts(&po);
+    /* the paper's criteria, as the data give them (not the equalised
+     * search's weighted ones: docs/estimator.md, "An equalised search") */
+    po.equalise = 0;
     po.nthreads = (int)threads;
     po.k = (int)(k > 0 ? k : maps ? 2 : 8);
     po.i = (int)(iters > 0 ? iters : maps ? 1 : 8);

@@ -615,8 +615,8 @@ int cmd_navigate(int argc, char **argv)
                 return cli_usage("navigate", "--eta-outlier needs a factor > 1 (or inf)");
             break;
         case OPT_EQUALISE:
-            if (cli_parse_double(optarg, &no.pair.equalise) || !(no.pair.equalise >= 0 && no.pair.equalise <= 1))
-                return cli_usage("navigate", "--equalise needs a smoothing length in [0, 1] m (0: off)");
+            if (cli_parse_double(optarg, &no.pair.equalise) || !(no.pair.equalise >= 0 && no.pair.equalise <= 0.25))
+                return cli_usage("navigate", "--equalise needs a smoothing length in [0, 0.25] m (0: off)");
             break;
         case 'U':
             if (cli_parse_double(optarg, &no.pair.surge_sigma) || !(no.pair.surge_sigma >= 0))

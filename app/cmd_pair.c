@@ -77,7 +77,7 @@ static const char *help =
     "                    intensity smoothed over M metres, so that a feature far\n"
     "                    brighter than the seabed does not lead it astray; the\n"
     "                    final stage and the verdict's eta stay unweighted\n"
-    "                    (default 0.05; 0: off; 'equalised' in --json;\n"
+    "                    (default 0.05, at most 0.25; 0: off; 'equalised' in --json;\n"
     "                    docs/estimator.md, \"An equalised search\")\n"
     "  --threads N       OpenMP threads\n"
     "  --gpu             the error evaluations on a CUDA GPU (builds configured\n"
@@ -177,8 +177,8 @@ int cmd_pair(int argc, char **argv)
                 return cli_usage("pair", "--compact-contrast needs a contrast >= 0 (or inf)");
             break;
         case 'W':
-            if (cli_parse_double(optarg, &equalise) || !(equalise >= 0 && equalise <= 1))
-                return cli_usage("pair", "--equalise needs a smoothing length in [0, 1] m (0: off)");
+            if (cli_parse_double(optarg, &equalise) || !(equalise >= 0 && equalise <= 0.25))
+                return cli_usage("pair", "--equalise needs a smoothing length in [0, 0.25] m (0: off)");
             break;
         case 'C':
             final_c = sasnav_final_criterion_parse(optarg);

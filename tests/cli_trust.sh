@@ -135,7 +135,7 @@ EOF
 # null: an 8-ping run (7 speckle-like pairs, at least the rule's 6) is
 # navigated with the default factor; the median that navigate reports must
 # be the one computed here from the pairs' etas (the pairs that take part:
-# usable, "ok" or "ambiguous" by the estimator, both contrasts at most the
+# usable, "ok" or "ambiguous" before the resolution, both contrasts at most the
 # verdict's gate 4). Then a factor between the largest and the second
 # largest ratio to that median: exactly the pair with the largest eta is
 # marked, "ambiguous", warned about and counted; the others stay as they
@@ -151,7 +151,7 @@ EOF
 F=$(python3 - "$T/n8.json" <<'EOF'
 import json, statistics, sys
 d = json.load(open(sys.argv[1]))
-part = [p for p in d["pairs"] if p["estimator"] in ("ok", "ambiguous") and
+part = [p for p in d["pairs"] if p["first_status"] in ("ok", "ambiguous") and
         max(p["contrast"], p["contrast_q"]) <= 4]
 assert len(part) >= 6, len(part)
 med = statistics.median(p["eta"] for p in part)

@@ -480,6 +480,24 @@ static void check_verdict(void)
  * grid is chosen): AUTO takes full pixels there (a point target's contrast
  * is far above joint_contrast_max), and the search forced onto the coarse
  * grid must not pass the pair as "ok" either. */
+/* The point preset's pair 8 -> 9 with cheap final iterations (k = 3, i =
+ * 2; the verdict is the search's) on a 0.6 m range extent, the options in
+ * *po (their k, i, range extent, range and offset set here); NULL (and a
+ * failed check) when it cannot be made. */
+static sasnav_pair *point_pair(const sasnav_run *run, sasnav_pair_opts *po)
+{
+    po->k = 3;
+    po->i = 2;
+    po->range_extent = 0.6;
+    po->range = run->range_of_interest;
+    po->tx_lag = run->tx_lag;
+    sasnav_pair *pair = NULL;
+    CHECK_OK(sasnav_pair_create(&run->sys, &run->array, &run->win, po, &pair));
+    if (pair) CHECK_OK(sasnav_pair_set_data(pair, sasnav_run_ping(run, 8), sasnav_run_ping(run, 9),
+                                            sasnav_ping_displacement(&run->nav[8], &run->nav[9])));
+    return pair;
+}
+
 static void check_search_grid(void)
 {
     sasnav_pose truth = {-0.0345, 0.0217, 0.041};
@@ -509,17 +527,9 @@ static void check_search_grid(void)
     if (!run) return;
     for (int g = 0; g < 2; g++) {
         sasnav_pair_default_opts(&po);
-        po.k = 3; /* a final stage, cheap: the verdict is the search's */
-        po.i = 2;
-        po.range_extent = 0.6;
-        po.range = run->range_of_interest;
-        po.tx_lag = run->tx_lag;
         po.search_grid = g == 0 ? SASNAV_SEARCH_AUTO : SASNAV_SEARCH_COARSE;
-        pair = NULL;
-        CHECK_OK(sasnav_pair_create(&run->sys, &run->array, &run->win, &po, &pair));
+        pair = point_pair(run, &po);
         if (!pair) continue;
-        CHECK_OK(sasnav_pair_set_data(pair, sasnav_run_ping(run, 8), sasnav_run_ping(run, 9),
-                                      sasnav_ping_displacement(&run->nav[8], &run->nav[9])));
         CHECK_OK(sasnav_pair_estimate(pair, &r));
         printf("point target, search grid %s: %s, verdict %s, margin %.3f\n",
                sasnav_search_grid_name(po.search_grid), sasnav_search_grid_name(r.search_grid),
@@ -773,8 +783,10 @@ static void check_chain_paths(void)
     sasnav_pair_opts po;
     sasnav_pair_default_opts(&po);
     if (reduced) po.k = po.i = 2;
-    /* the level buffers hold the chains' images unweighted (the
-     * equalising weights, opts.equalise, multiply them after the chains) */
+    /* the evaluations below compare the level buffers with the chains
+     * computed one step at a time: without the equalising weights
+     * (opts.equalise), which multiply the buffers after the chains; the
+     * whole estimates further down are made with them (the default) */
     po.equalise = 0;
     po.nthreads = 1;
     sasnav_pair *one = make_pair_opts(run, &po);
@@ -801,6 +813,20 @@ static void check_chain_paths(void)
                       "%.17g %.17g %.17g", level, h, z[0], e[0], o[0], m + 1, z[m], e[m], o[m]);
         }
     sasnav_pair_destroy(four);
+    sasnav_pair_destroy(one);
+    sasnav_pair_destroy(two);
+    sasnav_pair_destroy(three);
+    /* whole estimates with the default options (an equalised search on
+     * this speckle seabed: the workers must follow the estimator's
+     * suspension of the weights, pair_workers) */
+    sasnav_pair_default_opts(&po);
+    if (reduced) po.k = po.i = 2;
+    po.nthreads = 1;
+    one = make_pair_opts(run, &po);
+    po.nthreads = 2;
+    two = make_pair_opts(run, &po);
+    po.nthreads = 3;
+    three = make_pair_opts(run, &po);
     if (one && two && three) {
         sasnav_pair_result r1, rn[2];
         CHECK_OK(sasnav_pair_estimate(one, &r1));
@@ -818,6 +844,7 @@ static void check_chain_paths(void)
                   "counts differ: %d / %ld evaluations / applications against %d / %ld (%d threads)",
                   r1.evaluations, r1.applications, r2->evaluations, r2->applications, m + 2);
         }
+        CHECK(r1.equalised == 1 && rn[0].equalised == 1 && rn[1].equalised == 1, "the search was not equalised");
     }
     sasnav_pair_destroy(one);
     sasnav_pair_destroy(two);
@@ -1113,17 +1140,9 @@ static void check_equalise(void)
     sasnav_pair_result r[2];
     for (int on = 1; on >= 0; on--) {
         sasnav_pair_default_opts(&o);
-        o.k = 3;
-        o.i = 2;
-        o.range_extent = 0.6;
-        o.range = run->range_of_interest;
-        o.tx_lag = run->tx_lag;
         if (!on) o.equalise = 0;
-        sasnav_pair *pair = NULL;
-        CHECK_OK(sasnav_pair_create(&run->sys, &run->array, &run->win, &o, &pair));
+        sasnav_pair *pair = point_pair(run, &o);
         if (!pair) continue;
-        CHECK_OK(sasnav_pair_set_data(pair, sasnav_run_ping(run, 8), sasnav_run_ping(run, 9),
-                                      sasnav_ping_displacement(&run->nav[8], &run->nav[9])));
         CHECK_OK(sasnav_pair_estimate(pair, &r[on]));
         CHECK(r[on].equalised == 0 && sasnav_pair_result_contrast(&r[on]) > o.verdict_contrast,
               "point target: equalised %d (contrast %.2f)", r[on].equalised, sasnav_pair_result_contrast(&r[on]));

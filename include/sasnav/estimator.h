@@ -231,21 +231,28 @@ typedef struct {
                               placed at the prior both at most 4, the
                               verdict's default gate; a constant, so
                               that verdict_contrast does not move the
-                              estimates), the search stages'
-                              criteria (zeta and eta on the search grid:
-                              global, zeta and first eta stages, the slip
-                              check) weight each pixel by 1 / sqrt(S +
-                              0.1 mean S), S the two images' intensity
-                              smoothed by a Gaussian of this many metres,
-                              so that a feature 20 dB or more above the
-                              seabed, seen by one ping's beam and hardly
-                              by the other's, does not lead the search
-                              into a wrong basin; the chosen candidate
-                              then goes through an unweighted eta stage,
-                              and the final stage, the verdict's eta and
-                              the overlap are never weighted
-                              (result.equalised; docs/estimator.md, "An
-                              equalised search") */
+                              estimates), the search stages' criteria
+                              (zeta and eta on the search grid: the
+                              global stage's valley scan and its
+                              refinement, not its image-shift
+                              correlation; the zeta and first eta
+                              stages; the slip check) weight each pixel
+                              by 1 / sqrt(S + 0.1 mean S), S the two
+                              images' intensity smoothed by a Gaussian
+                              of this many metres (truncated at 127
+                              pixels either side; the CLI takes at most
+                              0.25 m), so that a feature 20 dB or more
+                              above the seabed, seen by one ping's beam
+                              and hardly by the other's, does not lead
+                              the search into a wrong basin; the chosen
+                              candidate then goes through an unweighted
+                              eta stage, and the final stage, the
+                              reported eta, the verdict's eta bound and
+                              the overlap are never weighted; the
+                              reported zeta, the candidates' zeta and
+                              eta and the margin are the weighted
+                              search's (result.equalised;
+                              docs/estimator.md, "An equalised search") */
 } sasnav_pair_opts;
 
 /* The final stage's criterion (sasnav_pair_opts.final_criterion):
@@ -529,8 +536,10 @@ int sasnav_run_tx_yaw_from_estimate(const sasnav_run *run, sasnav_pose displacem
  * nominal + error). level 0: coarse pixels, coarse (k, i); level 1: full
  * pixels, coarse (k, i); level 2: full pixels, final (k, i). blurred != 0
  * blurs the moduli before zeta (global-stage criterion). Either output may
- * be NULL.
- * overlap (may be NULL) receives ||psi_p|| / ||rho_p||. */
+ * be NULL. At levels 0 and 1 of an equalised pair (opts.equalise on a
+ * scene speckle-like at the prior) zeta and eta are the search's weighted
+ * ones; with opts.equalise = 0 (or at level 2) the data's own.
+ * overlap (may be NULL) receives ||psi_p|| / ||rho_p|| (never weighted). */
 int sasnav_pair_eval(sasnav_pair *pair, sasnav_pose error, int level, int blurred,
                      double *zeta, double *eta, double *overlap);
 

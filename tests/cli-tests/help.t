@@ -163,7 +163,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       intensity smoothed over M metres, so that a feature far
                       brighter than the seabed does not lead it astray; the
                       final stage and the verdict's eta stay unweighted
-                      (default 0.05; 0: off; 'equalised' in --json;
+                      (default 0.05, at most 0.25; 0: off; 'equalised' in --json;
                       docs/estimator.md, "An equalised search")
     --threads N       OpenMP threads
     --gpu             the error evaluations on a CUDA GPU (builds configured
