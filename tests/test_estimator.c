@@ -24,6 +24,17 @@ static sasnav_run *simulate(sasnav_pose err, uint64_t seed)
     return run;
 }
 
+/* The point preset's run (one reflector on an empty seabed), or NULL
+ * after a failed check. */
+static sasnav_run *point_run(void)
+{
+    sasnav_scenario sc;
+    sasnav_scenario_preset("point", &sc);
+    sasnav_run *run = NULL;
+    CHECK_OK(sasnav_simulate(&sc, NULL, NULL, &run));
+    return run;
+}
+
 /* In sanitized builds (about 20x slower) the estimates use k = i = 2 and
  * only the sanitizer's findings and coarse bounds are checked. */
 #ifdef SASNAV_TEST_SANITIZED
@@ -239,10 +250,7 @@ static void check_fixed_yaw(void)
  * verdict does not depend on the final stage's accuracy. */
 static void check_verdict(void)
 {
-    sasnav_scenario sc;
-    sasnav_scenario_preset("point", &sc);
-    sasnav_run *run = NULL;
-    CHECK_OK(sasnav_simulate(&sc, NULL, NULL, &run));
+    sasnav_run *run = point_run();
     if (!run) return;
     sasnav_pair_opts po;
     sasnav_pair_default_opts(&po);
@@ -520,10 +528,7 @@ static void check_search_grid(void)
     sasnav_pair_destroy(pair);
     sasnav_run_free(run);
 
-    sasnav_scenario sc;
-    sasnav_scenario_preset("point", &sc);
-    run = NULL;
-    CHECK_OK(sasnav_simulate(&sc, NULL, NULL, &run));
+    run = point_run();
     if (!run) return;
     for (int g = 0; g < 2; g++) {
         sasnav_pair_default_opts(&po);
@@ -1132,10 +1137,7 @@ static void check_equalise(void)
     }
     sasnav_run_free(run);
 
-    sasnav_scenario sc;
-    sasnav_scenario_preset("point", &sc);
-    run = NULL;
-    CHECK_OK(sasnav_simulate(&sc, NULL, NULL, &run));
+    run = point_run();
     if (!run) return;
     sasnav_pair_result r[2];
     for (int on = 1; on >= 0; on--) {
