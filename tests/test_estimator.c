@@ -821,9 +821,13 @@ static void check_chain_paths(void)
     sasnav_pair_destroy(one);
     sasnav_pair_destroy(two);
     sasnav_pair_destroy(three);
-    /* whole estimates with the default options (an equalised search on
-     * this speckle seabed: the workers must follow the estimator's
-     * suspension of the weights, pair_workers) */
+    /* whole estimates with the default options, on the seabed of ripple
+     * seed 1, whose search is equalised (a feature stands out of its
+     * smoothed intensity; seed 4's does not): the workers must follow the
+     * estimator's suspension of the weights, pair_workers */
+    sasnav_run_free(run);
+    run = simulate(truth, 1);
+    if (!run) return;
     sasnav_pair_default_opts(&po);
     if (reduced) po.k = po.i = 2;
     po.nthreads = 1;
@@ -1095,8 +1099,9 @@ static void check_rejudge(void)
 
 /* The equalised search (opts.equalise): refused when negative or not
  * finite; off on a compact scene (a point target: the gate, contrast above
- * verdict_contrast), whose estimate is then the bits of equalise = 0; on
- * on the paper pair's speckle-like seabed, whose estimate stays within the
+ * verdict_contrast) and on a seabed where nothing stands out (ripple seed
+ * 4: the peak gate), whose estimates are then the bits of equalise = 0;
+ * on on the paper pair's seabed (seed 1), whose estimate stays within the
  * issue's bounds either way (the final stage is unweighted). Its purpose,
  * a pair whose search a bright feature led astray, is tested from the
  * command line (tests/cli_equalise.sh). */
@@ -1124,9 +1129,11 @@ static void check_equalise(void)
         sasnav_pair_result r;
         if (!pair) continue;
         CHECK_OK(sasnav_pair_estimate(pair, &r));
-        printf("paper case, equalise %g: equalised %d, error (%.3f mm, %.4f mm, %.1e rad), contrasts %.2f / %.2f\n",
+        printf("paper case, equalise %g: equalised %d, error (%.3f mm, %.4f mm, %.1e rad), contrasts %.2f / %.2f, "
+               "peak %.2f\n",
                o.equalise, r.equalised, 1e3 * (r.error.x - truth.x), 1e3 * (r.error.y - truth.y),
-               r.error.theta - truth.theta, pair->level[1].contrast, pair->level[1].contrast_q0);
+               r.error.theta - truth.theta, pair->level[1].contrast, pair->level[1].contrast_q0,
+               pair->level[1].eq_peak);
         CHECK(r.equalised == on, "paper case, equalise %g: equalised %d", o.equalise, r.equalised);
         double tol = reduced ? 3 : 1; /* the sanitised build's k = i = 2 */
         CHECK(fabs(r.error.x - truth.x) <= tol * 5e-4 && fabs(r.error.y - truth.y) <= tol * 2e-4 &&
@@ -1135,6 +1142,29 @@ static void check_equalise(void)
               1e3 * (r.error.x - truth.x), 1e3 * (r.error.y - truth.y), r.error.theta - truth.theta);
         sasnav_pair_destroy(pair);
     }
+    sasnav_run_free(run);
+
+    /* ripple seed 4: speckle with nothing standing out of its smoothed
+     * intensity (peak under the gate's 8 times the mean): not equalised,
+     * the bits of equalise = 0 */
+    run = simulate(truth, 4);
+    if (!run) return;
+    sasnav_pair_result rs[2];
+    for (int on = 1; on >= 0; on--) {
+        sasnav_pair_default_opts(&o);
+        if (reduced) o.k = o.i = 2;
+        if (!on) o.equalise = 0;
+        sasnav_pair *pair = make_pair_opts(run, &o);
+        if (!pair) continue;
+        CHECK_OK(sasnav_pair_estimate(pair, &rs[on]));
+        if (on)
+            CHECK(pair->level[1].eq_peak > 1 && pair->level[1].eq_peak < 8 && rs[on].equalised == 0,
+                  "speckle seabed: peak %.2f, equalised %d", pair->level[1].eq_peak, rs[on].equalised);
+        sasnav_pair_destroy(pair);
+    }
+    CHECK(rs[0].error.x == rs[1].error.x && rs[0].error.y == rs[1].error.y &&
+              rs[0].error.theta == rs[1].error.theta && rs[0].eta == rs[1].eta,
+          "speckle seabed: the estimate depends on equalise although the gate is closed");
     sasnav_run_free(run);
 
     run = point_run();

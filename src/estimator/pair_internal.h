@@ -52,9 +52,11 @@ typedef struct {
     float *window;
     /* The search's equalising weights (opts.equalise; levels 0 and 1,
      * NULL elsewhere or when off) and the contrast of q's reconstruction
-     * at the prior (their gate, with p's). */
+     * at the prior (their gate, with p's), and the peak of the weights'
+     * smoothed intensity over its mean in the window (their other gate). */
     double *eqw;
     double contrast_q0;
+    double eq_peak;
     double rho_p_norm;
     double contrast;         /* of |rho_p|^2 over the window (std / mean) */
     /* 2-D cross-correlation of |rho_p| and |rho_q| (global stage). */
