@@ -231,7 +231,11 @@ typedef struct {
                               placed at the prior both at most 4, the
                               verdict's default gate; a constant, so
                               that verdict_contrast does not move the
-                              estimates), the search stages' criteria
+                              estimates) where a feature stands out
+                              (the peak of S below over the error
+                              window at least 8 times its mean there;
+                              smoothed speckle peaks at 2.5-5.6 times),
+                              the search stages' criteria
                               (zeta and eta on the search grid: the
                               global stage's valley scan and its
                               refinement, not its image-shift
@@ -407,7 +411,7 @@ typedef struct {
                                   no estimate was made */
     int equalised;             /* 1: the search's criteria were weighted
                                   (opts.equalise on a scene speckle-like at
-                                  the prior) */
+                                  the prior where a feature stands out) */
 } sasnav_pair_result;
 
 typedef struct sasnav_pair sasnav_pair;
@@ -536,8 +540,9 @@ int sasnav_run_tx_yaw_from_estimate(const sasnav_run *run, sasnav_pose displacem
  * nominal + error). level 0: coarse pixels, coarse (k, i); level 1: full
  * pixels, coarse (k, i); level 2: full pixels, final (k, i). blurred != 0
  * blurs the moduli before zeta (global-stage criterion). Either output may
- * be NULL. At levels 0 and 1 of an equalised pair (opts.equalise on a
- * scene speckle-like at the prior) zeta and eta are the search's weighted
+ * be NULL. At levels 0 and 1 of an equalised pair (result.equalised:
+ * opts.equalise on a scene speckle-like at the prior where a feature
+ * stands out) zeta and eta are the search's weighted
  * ones; with opts.equalise = 0 (or at level 2) the data's own.
  * overlap (may be NULL) receives ||psi_p|| / ||rho_p|| (never weighted). */
 int sasnav_pair_eval(sasnav_pair *pair, sasnav_pose error, int level, int blurred,

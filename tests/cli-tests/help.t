@@ -158,11 +158,13 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       which the scene is compact for the verdict (default 4;
                       speckle about 1, simulated seabeds up to 3.9; 'inf':
                       never; reported as 'contrast', 'contrast_q' in --json)
-    --equalise M      on a scene speckle-like at the prior, the search weights
-                      each pixel by the inverse square root of the images'
-                      intensity smoothed over M metres, so that a feature far
-                      brighter than the seabed does not lead it astray; the
-                      final stage and the verdict's eta stay unweighted
+    --equalise M      on a scene speckle-like at the prior where a feature
+                      stands out (its smoothed intensity 9 dB over the mean),
+                      the search weights each pixel by the inverse square root
+                      of the images' intensity smoothed over M metres, so that
+                      a feature far brighter than the seabed does not lead it
+                      astray; the final stage and the verdict's eta stay
+                      unweighted
                       (default 0.05, at most 0.25; 0: off; 'equalised' in --json;
                       docs/estimator.md, "An equalised search")
     --threads N       OpenMP threads
@@ -319,8 +321,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       best (default 1.6; > 1, or 'inf': off; needs 6 such
                       pairs; docs/navigation.md)
     --equalise M      each pair's search weights the images by their smoothed
-                      intensity on speckle-like scenes (default 0.05 m; 0:
-                      off; see 'sasnav pair --help')
+                      intensity on speckle-like scenes where a feature stands
+                      out (default 0.05 m; 0: off; see 'sasnav pair --help')
     --final C         each pair's final-stage criterion: auto (default), eta
                       or joint (see 'sasnav pair --help')
     --fix-yaw         hold each pair's yaw error at 0 (rail or plotter)
