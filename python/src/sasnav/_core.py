@@ -926,7 +926,7 @@ class PairEstimate:
     which decided between the speckle and the compact-scene rules (0 for
     DPCA); equalised: True where the search's criteria were weighted by the
     images' smoothed intensity (pair option equalise, on a scene
-    speckle-like at the prior); candidates: list of Candidate; status: "ok" or the
+    speckle-like at the prior where a feature stands out); candidates: list of Candidate; status: "ok" or the
     estimator's status text; result: the C struct (every field)."""
 
     p: int
