@@ -219,11 +219,11 @@ static int place_q(sasnav_pair *pr, int level, sasnav_pose error);
 
 /* ... and where the peak of the weights' smoothed intensity S over the
  * window (its inner part, taper >= 0.5) is at least this times S's mean
- * there (9 dB): a feature stands out. Smoothed speckle peaks at 2.5-5.6
- * times its mean on the simulated seabeds (5 cm blur), the
- * 12 dB disc of paper-trajectory at 8-16, a 24 dB disc at 11-31; below
- * the gate the weights change estimates by at most 0.4 mm, either way
- * (docs/estimator.md, "An equalised search"), at 1.3x the evaluations. */
+ * there (9 dB): a feature stands out. On paper-trajectory runs (5 cm
+ * blur) pairs with the disc out of view peak at 2.5-5.6 times the mean,
+ * at its edge up to 8, with the disc in view at 8.6-31; below the gate
+ * the weights changed estimates by at most 0.41 mm, either way, at 1.3x
+ * the evaluations (docs/estimator.md, "An equalised search"). */
 #define EQUALISE_PEAK_MIN 8.0
 
 /* The search's equalising weights of a level (opts.equalise): q's
