@@ -94,7 +94,8 @@ struct sasnav_pair {
     sasnav_pose nominal;
     int ready;
     /* equalised: the search's criteria are weighted (levels 0 and 1 hold
-     * eqw and the scene is speckle-like at the prior); eq_suspended: not
+     * eqw, the scene is speckle-like at the prior and a feature stands
+     * out: make_levels); eq_suspended: not
      * now (the unweighted eta stage before the final one). */
     int equalised, eq_suspended;
     pair_level level[PAIR_LEVELS];
