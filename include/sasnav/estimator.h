@@ -233,7 +233,8 @@ typedef struct {
                               that verdict_contrast does not move the
                               estimates) where a feature stands out
                               (the peak of S below over the error
-                              window at least 8 times its mean there;
+                              window at least 8 times its mean over
+                              the window;
                               smoothed speckle peaks at 2.5-5.6 times
                               on the simulated seabeds),
                               the search stages' criteria

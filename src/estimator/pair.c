@@ -218,12 +218,13 @@ static int place_q(sasnav_pair *pr, int level, sasnav_pose error);
 #define EQUALISE_CONTRAST_MAX 4.0
 
 /* ... and where the peak of the weights' smoothed intensity S over the
- * window (its inner part, taper >= 0.5) is at least this times S's mean
- * there (9 dB): a feature stands out. On paper-trajectory runs (5 cm
- * blur) pairs with the disc out of view peak at 2.5-5.6 times the mean,
- * at its edge up to 8, with the disc in view at 8.6-31; below the gate
- * the weights changed estimates by at most 0.41 mm, either way, at 1.3x
- * the evaluations (docs/estimator.md, "An equalised search"). */
+ * window (its inner part, taper >= 0.5) is at least this times S's
+ * window-weighted mean (9 dB): a feature stands out. On paper-trajectory
+ * runs (the default 5 cm blur; not tuned for others) pairs with the disc
+ * out of view peak at 2.5-5.6 times the mean, at its edge up to 7.9, with
+ * the disc in view at 8.6-30.8; below the gate the weights changed
+ * estimates by at most 0.41 mm, either way, at 1.3x the evaluations
+ * (docs/estimator.md, "the peak gate"). */
 #define EQUALISE_PEAK_MIN 8.0
 
 /* The search's equalising weights of a level (opts.equalise): q's
