@@ -298,6 +298,7 @@ static void print_json(const char *input, const sasnav_navigation *nav)
             json_object_set_new(o, "contrast", json_real(np->result.contrast));
             json_object_set_new(o, "contrast_q", json_real(np->result.contrast_q));
             json_object_set_new(o, "equalised", json_boolean(np->result.equalised));
+            json_object_set_new(o, "equalise_peak", json_real(np->result.equalise_peak));
         }
         json_object_set_new(o, "candidates", candidates_json(&np->result));
         if (nav->aiding_used) {

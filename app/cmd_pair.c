@@ -324,6 +324,7 @@ int cmd_pair(int argc, char **argv)
         json_object_set_new(root, "contrast", json_real(r0->contrast));
         json_object_set_new(root, "contrast_q", json_real(r0->contrast_q));
         json_object_set_new(root, "equalised", json_boolean(r0->equalised));
+        json_object_set_new(root, "equalise_peak", json_real(r0->equalise_peak));
         json_object_set_new(root, "overlap", json_real(r0->overlap));
         json_object_set_new(root, "ambiguity", json_real(r0->ambiguity));
         json_object_set_new(root, "evaluations", json_integer(r0->evaluations));
@@ -414,14 +415,15 @@ int cmd_pair(int argc, char **argv)
                r->evaluations_eta, r->applications, r->seconds,
                r->status == SASNAV_OK ? "converged" : sasnav_strerror(r->status));
         printf("time per stage: global %.2f s (%ld applications), zeta %.2f s (%ld), eta %.2f s (%ld), "
-               "final %.2f s (%ld, %d evaluations, criterion %s); search grid %s%s; contrast %.2f (q %.2f)\n",
+               "final %.2f s (%ld, %d evaluations, criterion %s); search grid %s%s; contrast %.2f (q %.2f), "
+               "intensity peak %.1f x mean\n",
                r->seconds_global, r->applications_global, r->seconds_zeta, r->applications_zeta,
                r->seconds_eta, r->applications_eta, r->seconds_final, r->applications_final,
                r->evaluations_final,
                r->joint_rejected ? "eta, the joint misfit's estimate rejected"
                                  : sasnav_final_criterion_name(r->final_criterion),
                sasnav_search_grid_name(r->search_grid), r->equalised ? ", equalised" : "", r->contrast,
-               r->contrast_q);
+               r->contrast_q, r->equalise_peak);
         for (int kc = 0; kc < r->n_candidates; kc++) {
             const sasnav_pair_candidate *c = &r->candidates[kc];
             char scan_s[32];

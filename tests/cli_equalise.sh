@@ -37,6 +37,9 @@ on, off = (json.load(open(f)) for f in sys.argv[1:])
 e_on, e_off = on["estimation_error"]["surge"], off["estimation_error"]["surge"]
 print("cli_equalise: surge error %+.2f mm equalised, %+.2f mm without (%s)" % (1e3 * e_on, 1e3 * e_off, off["verdict"]))
 assert on["equalised"] is True and off["equalised"] is False, (on["equalised"], off["equalised"])
+# the gate's peak (the disc entering q's beam: 9 dB or more over the mean),
+# reported; 0 where the weights were not made
+assert on["equalise_peak"] >= 8 and off["equalise_peak"] == 0, (on["equalise_peak"], off["equalise_peak"])
 assert abs(e_on) < 2e-3, e_on
 assert abs(e_off) > 6.25e-3, e_off
 EOF

@@ -414,6 +414,12 @@ typedef struct {
     int equalised;             /* 1: the search's criteria were weighted
                                   (opts.equalise on a scene speckle-like at
                                   the prior where a feature stands out) */
+    float equalise_peak;       /* the equalising gate's peak: the largest
+                                  smoothed intensity over the error window
+                                  over its mean (full-pixel grid, at the
+                                  prior; equalised needs at least 8); 0
+                                  where the weights were not made
+                                  (opts.equalise 0, DPCA) */
 } sasnav_pair_result;
 
 typedef struct sasnav_pair sasnav_pair;

@@ -1237,6 +1237,7 @@ static int finish(sasnav_pair *pr, double pc_spacing, refine_out *r, refine_out 
     res->joint_rejected = r->joint_rejected;
     res->search_grid = search_level(pr) ? SASNAV_SEARCH_FINE : SASNAV_SEARCH_COARSE;
     res->equalised = pr->equalised;
+    res->equalise_peak = pr->level[1].eqw ? (float)pr->level[1].eq_peak : 0.0f;
     res->error = r->error;
     res->displacement = (sasnav_pose){pr->nominal.x + r->error.x, pr->nominal.y + r->error.y,
                                       pr->nominal.theta + r->error.theta};

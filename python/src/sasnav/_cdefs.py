@@ -16,6 +16,7 @@ from ctypes import (
     c_char,
     c_char_p,
     c_double,
+    c_float,
     c_int,
     c_long,
     c_uint64,
@@ -348,6 +349,7 @@ class PairResult(Structure):  # estimator.h
         ("contrast", c_double),
         ("contrast_q", c_double),
         ("equalised", c_int),
+        ("equalise_peak", c_float),
     ]
 
 

@@ -926,7 +926,9 @@ class PairEstimate:
     which decided between the speckle and the compact-scene rules (0 for
     DPCA); equalised: True where the search's criteria were weighted by the
     images' smoothed intensity (pair option equalise, on a scene
-    speckle-like at the prior where a feature stands out); candidates: list of Candidate; status: "ok" or the
+    speckle-like at the prior where a feature stands out); equalise_peak:
+    the gate's peak of the smoothed intensity over its mean (at least 8 to
+    be equalised; 0 where the weights were not made); candidates: list of Candidate; status: "ok" or the
     estimator's status text; result: the C struct (every field)."""
 
     p: int
@@ -955,6 +957,7 @@ class PairEstimate:
     contrast: float
     contrast_q: float
     equalised: bool
+    equalise_peak: float
     result: C.PairResult = field(repr=False)
 
 
@@ -989,6 +992,7 @@ def _estimate_from_c(r, p, q, nominal, truth):
                         r.contrast,
                         r.contrast_q,
                         bool(r.equalised),
+                        float(r.equalise_peak),
                         C.PairResult.from_buffer_copy(r))
 
 
