@@ -79,7 +79,8 @@ static const char *help =
     "                    a feature far brighter than the seabed does not lead it\n"
     "                    astray; the final stage and the verdict's eta stay\n"
     "                    unweighted\n"
-    "                    (default 0.05, at most 0.25; 0: off; 'equalised' in --json;\n"
+    "                    (default 0.05, at most 0.25; 0: off; 'equalised' and the\n"
+    "                    gate's 'equalise_peak' in --json;\n"
     "                    docs/estimator.md, \"An equalised search\")\n"
     "  --threads N       OpenMP threads\n"
     "  --gpu             the error evaluations on a CUDA GPU (builds configured\n"
@@ -414,16 +415,18 @@ int cmd_pair(int argc, char **argv)
                zeta_s, r->eta, r->overlap, r->evaluations, r->evaluations_global, r->evaluations_zeta,
                r->evaluations_eta, r->applications, r->seconds,
                r->status == SASNAV_OK ? "converged" : sasnav_strerror(r->status));
+        char peak_s[48] = "";
+        if (r->equalise_peak > 0)
+            snprintf(peak_s, sizeof peak_s, ", intensity peak %.1f x mean", r->equalise_peak);
         printf("time per stage: global %.2f s (%ld applications), zeta %.2f s (%ld), eta %.2f s (%ld), "
-               "final %.2f s (%ld, %d evaluations, criterion %s); search grid %s%s; contrast %.2f (q %.2f), "
-               "intensity peak %.1f x mean\n",
+               "final %.2f s (%ld, %d evaluations, criterion %s); search grid %s%s; contrast %.2f (q %.2f)%s\n",
                r->seconds_global, r->applications_global, r->seconds_zeta, r->applications_zeta,
                r->seconds_eta, r->applications_eta, r->seconds_final, r->applications_final,
                r->evaluations_final,
                r->joint_rejected ? "eta, the joint misfit's estimate rejected"
                                  : sasnav_final_criterion_name(r->final_criterion),
                sasnav_search_grid_name(r->search_grid), r->equalised ? ", equalised" : "", r->contrast,
-               r->contrast_q, r->equalise_peak);
+               r->contrast_q, peak_s);
         for (int kc = 0; kc < r->n_candidates; kc++) {
             const sasnav_pair_candidate *c = &r->candidates[kc];
             char scan_s[32];

@@ -417,9 +417,11 @@ typedef struct {
     float equalise_peak;       /* the equalising gate's peak: the largest
                                   smoothed intensity over the error window
                                   over its mean (full-pixel grid, at the
-                                  prior; equalised needs at least 8); 0
-                                  where the weights were not made
-                                  (opts.equalise 0, DPCA) */
+                                  prior; equalised needs at least 8 and
+                                  the contrast gate, so a compact scene
+                                  reports its peak unequalised); 0 where
+                                  the weights were not made (opts.equalise
+                                  0, DPCA) or no estimate was made */
 } sasnav_pair_result;
 
 typedef struct sasnav_pair sasnav_pair;

@@ -165,7 +165,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       a feature far brighter than the seabed does not lead it
                       astray; the final stage and the verdict's eta stay
                       unweighted
-                      (default 0.05, at most 0.25; 0: off; 'equalised' in --json;
+                      (default 0.05, at most 0.25; 0: off; 'equalised' and the
+                      gate's 'equalise_peak' in --json;
                       docs/estimator.md, "An equalised search")
     --threads N       OpenMP threads
     --gpu             the error evaluations on a CUDA GPU (builds configured
