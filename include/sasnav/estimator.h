@@ -234,10 +234,10 @@ typedef struct {
                               estimates) where a feature stands out
                               (the peak of S below over the error
                               window at least 8 times its mean over
-                              the window;
-                              smoothed speckle peaks at 2.5-5.6 times
-                              on the simulated seabeds),
-                              the search stages' criteria
+                              the window; smoothed speckle peaks at
+                              2.5-5.6 times on the simulated seabeds;
+                              result.equalise_peak), the search
+                              stages' criteria
                               (zeta and eta on the search grid: the
                               global stage's valley scan and its
                               refinement, not its image-shift

@@ -223,9 +223,8 @@ static int place_q(sasnav_pair *pr, int level, sasnav_pose error);
  * runs (the default 5 cm blur; not tuned for others) pairs with the disc
  * out of view peak at 2.5-5.6 times the mean, at its edge up to 7.9, with
  * the disc in view at 8.6-30.8 (over 15.8 also over the contrast gate);
- * below the gate the weights changed
- * estimates by at most 0.41 mm, either way, at 1.3x the evaluations
- * (docs/estimator.md, "the peak gate"). */
+ * below the gate the weights changed estimates by at most 0.41 mm, either
+ * way, at 1.3x the evaluations (docs/estimator.md, "the peak gate"). */
 #define EQUALISE_PEAK_MIN 8.0
 
 /* The search's equalising weights of a level (opts.equalise): q's
