@@ -250,15 +250,13 @@ static int level_weights(sasnav_pair *pr, pair_level *lv)
         lv->eqw[j] = a * a + b * b + c * c + d * d;
     }
     blur_map(&lv->grid, pr->opts.equalise, pr->opts.equalise, lv->eqw, lv->blur_tmp);
-    double s = 0, w = 0;
+    double s = 0, w = 0, peak = 0;
     for (size_t j = 0; j < lv->np; j++) {
         s += lv->window[j] * lv->eqw[j];
         w += lv->window[j];
+        if (lv->window[j] >= 0.5f && lv->eqw[j] > peak) peak = lv->eqw[j];
     }
     double floor_ = EQUALISE_FLOOR * (w > 0 ? s / w : 0.0);
-    double peak = 0;
-    for (size_t j = 0; j < lv->np; j++)
-        if (lv->window[j] >= 0.5f && lv->eqw[j] > peak) peak = lv->eqw[j];
     lv->eq_peak = w > 0 && s > 0 ? peak / (s / w) : 0.0;
     if (!(floor_ > 0)) floor_ = 1.0; /* nothing seen: weights uniform */
     for (size_t j = 0; j < lv->np; j++) lv->eqw[j] = 1.0 / sqrt(lv->eqw[j] + floor_);
