@@ -46,7 +46,9 @@ static const char *help =
     "                      phase-centre coincidence, the contrasts of p's and\n"
     "                      q's images (either above 4: compact-scene verdicts),\n"
     "                      eta, whether that is far above its phase's\n"
-    "                      (navigate --eta-outlier), status and verdict\n"
+    "                      (navigate --eta-outlier), status and verdict,\n"
+    "                      whether the search was equalised and the peak of\n"
+    "                      its smoothed intensity (0 where not measured)\n"
     "  trajectories.png    along/cross-track deviation from the mean of the K\n"
     "  correlation.csv     pairwise image correlations (navigated images)\n"
     "  siso_J.png, simo_J.png   images with the largest K's trajectory\n"
@@ -181,7 +183,7 @@ static int write_tables(const char *dir, const sasnav_validation *v)
     if ((rc = sasnav_text_commit(&out))) return rc;
     join(path, sizeof path, dir, "pairs.csv");
     if ((rc = sasnav_text_open(&out, path))) return rc;
-    fprintf(out.f, "k,p,q,surge,sway,yaw,error_surge,error_sway,error_yaw,margin,coincidence,contrast,contrast_q,eta,eta_outlier,status,verdict\n");
+    fprintf(out.f, "k,p,q,surge,sway,yaw,error_surge,error_sway,error_yaw,margin,coincidence,contrast,contrast_q,eta,eta_outlier,status,verdict,equalised,equalise_peak\n");
     for (int k = 0; k < v->n_k; k++)
         for (int j = 0; j < v->k[k].n_pairs; j++) {
             const sasnav_navigate_pair *np = &v->k[k].pairs[j];
@@ -193,8 +195,8 @@ static int write_tables(const char *dir, const sasnav_validation *v)
             else fprintf(out.f, "inf,");
             fprintf(out.f, "%d,%.3f,%.3f,%.4f,%d,", np->result.coincidence, np->result.contrast, np->result.contrast_q,
                     np->result.eta, np->eta_outlier);
-            fprintf(out.f, "%s,%s\n", np->status == SASNAV_OK ? "ok" : sasnav_strerror(np->status),
-                    sasnav_verdict_name(np->verdict));
+            fprintf(out.f, "%s,%s,%d,%.3f\n", np->status == SASNAV_OK ? "ok" : sasnav_strerror(np->status),
+                    sasnav_verdict_name(np->verdict), np->result.equalised, np->result.equalise_peak);
         }
     if ((rc = sasnav_text_commit(&out))) return rc;
     join(path, sizeof path, dir, "correlation.csv");

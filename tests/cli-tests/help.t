@@ -512,7 +512,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                         phase-centre coincidence, the contrasts of p's and
                         q's images (either above 4: compact-scene verdicts),
                         eta, whether that is far above its phase's
-                        (navigate --eta-outlier), status and verdict
+                        (navigate --eta-outlier), status and verdict,
+                        whether the search was equalised and the peak of
+                        its smoothed intensity (0 where not measured)
     trajectories.png    along/cross-track deviation from the mean of the K
     correlation.csv     pairwise image correlations (navigated images)
     siso_J.png, simo_J.png   images with the largest K's trajectory
