@@ -100,6 +100,7 @@ static void level_free(pair_level *lv)
     free(lv->blur_tmp);
     free(lv->window);
     free(lv->eqw);
+    free(lv->eq_gate);
 #pragma omp critical(sasnav_fftw_planner)
     {
         if (lv->xc_fwd_p) fftwf_destroy_plan(lv->xc_fwd_p);
@@ -110,6 +111,14 @@ static void level_free(pair_level *lv)
     fftwf_free(lv->xc_q);
     memset(lv, 0, sizeof *lv);
 }
+
+/* The scale (m) at which the equalising gate reads the smoothed
+ * intensity's peak (EQUALISE_PEAK_MIN below), whatever opts.equalise
+ * smooths the weights with: the peak over the mean falls as the smoothing
+ * widens (on paper-trajectory pairs, against this scale's, 1.3-2.2x at
+ * 2.5 cm, 0.5-0.8x at 10 cm), so a gate read at the weights' own scale
+ * would mean something else at each setting. */
+#define EQUALISE_GATE_BLUR 0.05
 
 static int level_init(sasnav_pair *pr, pair_level *lv, double pixel, int k, int i)
 {
@@ -147,9 +156,11 @@ static int level_init(sasnav_pair *pr, pair_level *lv, double pixel, int k, int 
     /* the search's levels (0, 1) hold the equalising weights */
     int equalises = o->equalise > 0 && lv - pr->level < 2;
     if (equalises) lv->eqw = malloc(sizeof(double) * np);
+    int gate_apart = equalises && o->equalise != EQUALISE_GATE_BLUR;
+    if (gate_apart) lv->eq_gate = malloc(sizeof(double) * np);
     if (!lv->rho_p || !lv->rho_q || !lv->psi_p || !lv->psi_q || !lv->tmp || !lv->data_tmp ||
         !lv->cgls_work || !lv->tmp2 || !lv->data_tmp2 || !lv->cgls_work2 || !lv->mod_p || !lv->mod_q || !lv->blur_tmp || !lv->window ||
-        (equalises && !lv->eqw))
+        (equalises && !lv->eqw) || (gate_apart && !lv->eq_gate))
         return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for the estimator");
     /* Correlation buffers zero-padded to twice the grid (linear, not
      * circular, correlation); plans made once here. */
@@ -217,21 +228,37 @@ static int place_q(sasnav_pair *pr, int level, sasnav_pose error);
  * estimates. */
 #define EQUALISE_CONTRAST_MAX 4.0
 
-/* ... and where the peak of the weights' smoothed intensity S over the
- * window (its inner part, taper >= 0.5) is at least this times S's
- * window-weighted mean (9 dB): a feature stands out. On paper-trajectory
- * runs (the default 5 cm blur; not tuned for others) pairs with the disc
+/* ... and where the peak of the weights' intensity S, smoothed at
+ * EQUALISE_GATE_BLUR, over the window (its inner part, taper >= 0.5) is at
+ * least this times S's window-weighted mean (9 dB): a feature stands out.
+ * On paper-trajectory runs pairs with the disc
  * out of view peak at 2.5-5.6 times the mean, at its edge up to 7.9, with
  * the disc in view at 8.6-30.8 (over 15.8 also over the contrast gate);
  * below the gate the weights changed estimates by at most 0.41 mm, either
  * way, at 1.3x the evaluations (docs/estimator.md, "the peak gate"). */
 #define EQUALISE_PEAK_MIN 8.0
 
+/* The window-weighted mean of a map S over the error window; with peak,
+ * also the largest S in the window's inner part (taper >= 0.5) over that
+ * mean (0 where the window sees nothing). */
+static double window_peak(const pair_level *lv, const double *S, double *peak_ratio)
+{
+    double s = 0, w = 0, peak = 0;
+    for (size_t j = 0; j < lv->np; j++) {
+        s += lv->window[j] * S[j];
+        w += lv->window[j];
+        if (lv->window[j] >= 0.5f && S[j] > peak) peak = S[j];
+    }
+    if (peak_ratio) *peak_ratio = w > 0 && s > 0 ? peak / (s / w) : 0.0;
+    return w > 0 ? s / w : 0.0;
+}
+
 /* The search's equalising weights of a level (opts.equalise): q's
  * reconstruction at the prior, then w = 1 / sqrt(S + floor), S = |rho_p|^2
  * + |rho_q|^2 smoothed by a Gaussian of opts.equalise metres (both axes),
- * floor = EQUALISE_FLOOR x the window's mean of S; and q's contrast there
- * (the gate). Leaves rho_q as q's image at the prior (a scratch buffer:
+ * floor = EQUALISE_FLOOR x the window's mean of S; and the gates: q's
+ * contrast there, and S's peak over its mean with S smoothed at
+ * EQUALISE_GATE_BLUR. Leaves rho_q as q's image at the prior (a scratch buffer:
  * each evaluation makes its own). */
 static int level_weights(sasnav_pair *pr, pair_level *lv)
 {
@@ -249,15 +276,14 @@ static int level_weights(sasnav_pair *pr, pair_level *lv)
         double c = crealf(lv->rho_q[j]), d = cimagf(lv->rho_q[j]);
         lv->eqw[j] = a * a + b * b + c * c + d * d;
     }
-    blur_map(&lv->grid, pr->opts.equalise, pr->opts.equalise, lv->eqw, lv->blur_tmp);
-    double s = 0, w = 0, peak = 0;
-    for (size_t j = 0; j < lv->np; j++) {
-        s += lv->window[j] * lv->eqw[j];
-        w += lv->window[j];
-        if (lv->window[j] >= 0.5f && lv->eqw[j] > peak) peak = lv->eqw[j];
+    if (lv->eq_gate) {
+        memcpy(lv->eq_gate, lv->eqw, sizeof(double) * lv->np);
+        blur_map(&lv->grid, EQUALISE_GATE_BLUR, EQUALISE_GATE_BLUR, lv->eq_gate, lv->blur_tmp);
+        window_peak(lv, lv->eq_gate, &lv->eq_peak);
     }
-    double floor_ = EQUALISE_FLOOR * (w > 0 ? s / w : 0.0);
-    lv->eq_peak = w > 0 && s > 0 ? peak / (s / w) : 0.0;
+    blur_map(&lv->grid, pr->opts.equalise, pr->opts.equalise, lv->eqw, lv->blur_tmp);
+    double mean = window_peak(lv, lv->eqw, lv->eq_gate ? NULL : &lv->eq_peak);
+    double floor_ = EQUALISE_FLOOR * mean;
     if (!(floor_ > 0)) floor_ = 1.0; /* nothing seen: weights uniform */
     for (size_t j = 0; j < lv->np; j++) lv->eqw[j] = 1.0 / sqrt(lv->eqw[j] + floor_);
     return SASNAV_OK;

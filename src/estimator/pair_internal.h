@@ -53,8 +53,10 @@ typedef struct {
     /* The search's equalising weights (opts.equalise; levels 0 and 1,
      * NULL elsewhere or when off) and the contrast of q's reconstruction
      * at the prior (their gate, with p's), and the peak of the weights'
-     * smoothed intensity over its mean in the window (their other gate). */
-    double *eqw;
+     * smoothed intensity over its mean in the window (their other gate;
+     * the intensity smoothed at the gate's own scale in eq_gate where
+     * opts.equalise differs from it, NULL otherwise). */
+    double *eqw, *eq_gate;
     double contrast_q0;
     double eq_peak;
     double rho_p_norm;

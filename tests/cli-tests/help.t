@@ -159,7 +159,8 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       speckle about 1, simulated seabeds up to 3.9; 'inf':
                       never; reported as 'contrast', 'contrast_q' in --json)
     --equalise M      on a scene speckle-like at the prior where a feature
-                      stands out (its smoothed intensity 9 dB over the mean),
+                      stands out (its intensity smoothed over 5 cm peaks 9 dB
+                      over the mean),
                       the search weights each pixel by the inverse square root
                       of the images' intensity smoothed over M metres, so that
                       a feature far brighter than the seabed does not lead it
