@@ -12,6 +12,17 @@ the truth:
                          as --keep-length does)
   truth surge, est sway  what the estimated sway alone would give
   est surge, truth sway  what the estimated surge alone would give
+  input along, est across  the input's positions moved only across its
+                         track, by the estimated sway steps: each group's
+                         correction c along its normal chained from
+                         (X[g+1] - X[g]) . n[g] = estimated sway step,
+                         c = 0 at the first group, the misclosure spread
+                         (a fusion that takes the along-track from the
+                         input, an INS with a DVL, and the across-track
+                         from the echoes; mixing the steps' axes in each
+                         group's frame instead leaks one into the other)
+  input along, true across  the same with the truth's sway steps: what is
+                         left is the input's error at the first group
   surge: kept drift      the truth plus the part of the surge errors that
                          follows the input's step errors (b x input error)
   surge: noise           the truth plus the rest of the surge errors
@@ -19,7 +30,10 @@ the truth:
 Closed runs (--closed) spread the misclosure evenly, as the library does.
 Errors are rms over the groups in the true centroid's frame (along,
 across), after the rigid move that puts the first input centroid on the
-first true one, as bench_virtual aligns.
+first true one, as bench_virtual aligns; with --rigid after the
+least-squares rigid fit of all groups onto the truth instead (a
+navigation is known up to a rigid move: this does not charge a path for
+its first group's error).
 
 --fit L,LAM additionally fits a smooth correction of the input navigation
 to all steps (world translations at knots every L groups, linear between
@@ -30,7 +44,7 @@ rms): a least-squares alternative to chaining (docs/airsas.md, section 3).
 white noise of those rms (mm; seed 1) before everything else: what the
 chaining and the fit give with unbiased steps of that quality.
 
-usage: virtual_decompose.py DUMP [--closed] [--fit L,LAM ...] [--synthetic SURGE,SWAY]
+usage: virtual_decompose.py DUMP [--closed] [--rigid] [--fit L,LAM ...] [--synthetic SURGE,SWAY]
 """
 import sys
 
@@ -42,10 +56,20 @@ def rot(t):
     return np.array([[c, -s], [s, c]])
 
 
+RIGID = False
+
+
 def errors(P, T, C):
     """rms along / across (mm) of positions P + C against the truth T."""
-    R = rot(T[0, 2] - P[0, 2])
-    Q = (R @ (P[:, :2] + C - P[0, :2]).T).T + T[0, :2]
+    if RIGID:
+        A = P[:, :2] + C
+        A0, T0 = A.mean(0), T[:, :2].mean(0)
+        U, _, Vt = np.linalg.svd((A - A0).T @ (T[:, :2] - T0))
+        D = np.diag([1.0, np.sign(np.linalg.det(Vt.T @ U.T))])
+        Q = (Vt.T @ D @ U.T @ (A - A0).T).T + T0
+    else:
+        R = rot(T[0, 2] - P[0, 2])
+        Q = (R @ (P[:, :2] + C - P[0, :2]).T).T + T[0, :2]
     e = Q - T[:, :2]
     along = np.cos(T[:, 2]) * e[:, 0] + np.sin(T[:, 2]) * e[:, 1]
     across = -np.sin(T[:, 2]) * e[:, 0] + np.cos(T[:, 2]) * e[:, 1]
@@ -63,6 +87,22 @@ def chain(P, steps, closed):
         end = Q[G - 1] + rot(P[G - 1, 2]) @ steps[G - 1]
         Q -= np.outer(np.arange(G) / G, end - Q[0])
     return Q - P[:, :2]
+
+
+def across_only(P, N, Es, closed):
+    """Corrections (world) of the input's positions along each group's
+    normal, chained from the estimated sway steps (see the docstring)."""
+    G = P.shape[0]
+    npair = G if closed else G - 1
+    c = np.zeros(npair + 1)
+    for g in range(npair):
+        h = (g + 1) % G
+        c[g + 1] = (Es[g, 1] - N[g, 1] + c[g]) / np.cos(P[h, 2] - P[g, 2])
+    c = c[:G]
+    if closed:
+        c = c - np.arange(G) / G * (c[0] + (Es[G - 1, 1] - N[G - 1, 1] + c[G - 1])
+                                    / np.cos(P[0, 2] - P[G - 1, 2]) - c[0])
+    return np.c_[-np.sin(P[:, 2]) * c, np.cos(P[:, 2]) * c]
 
 
 def fit(P, N, E, used, closed, L, lam):
@@ -121,7 +161,9 @@ def main(argv):
     if len(argv) < 2:
         print(__doc__.strip().splitlines()[-1], file=sys.stderr)
         return 2
+    global RIGID
     closed = "--closed" in argv
+    RIGID = "--rigid" in argv
     fits = [tuple(argv[i + 1].split(",")) for i, a in enumerate(argv) if a == "--fit"]
     d = np.loadtxt(argv[1], ndmin=2)
     G = d.shape[0]
@@ -147,11 +189,13 @@ def main(argv):
         ("surge: kept drift only", np.c_[tr[:, 0] + b * ei, tr[:, 1]]),
         ("surge: noise only", np.c_[tr[:, 0] + noise, tr[:, 1]]),
     ]
-    print("# %d groups, %s; steps' surge error = %.3f x input error + noise of %.3f mm rms"
-          % (G, "closed" if closed else "open", b, 1e3 * noise.std()))
+    print("# %d groups, %s%s; steps' surge error = %.3f x input error + noise of %.3f mm rms"
+          % (G, "closed" if closed else "open", ", rigid fit" if RIGID else "", b, 1e3 * noise.std()))
     print("# %-28s  along mm  across mm" % "steps chained")
     for name, st in rows:
         print("  %-28s  %8.3f  %9.3f" % ((name,) + errors(P, T, chain(P, st, closed))))
+    print("  %-28s  %8.3f  %9.3f" % (("input along, est across",) + errors(P, T, across_only(P, N, Es, closed))))
+    print("  %-28s  %8.3f  %9.3f" % (("input along, true across",) + errors(P, T, across_only(P, N, tr, closed))))
     for L, lam in fits:
         C, sig = fit(P, N, Es, used, closed, int(L), float(lam))
         print("  %-28s  %8.3f  %9.3f   (residual rms %.3f / %.4f mm)"
