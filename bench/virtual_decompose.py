@@ -16,13 +16,23 @@ the truth:
                          track, by the estimated sway steps: each group's
                          correction c along its normal chained from
                          (X[g+1] - X[g]) . n[g] = estimated sway step,
-                         c = 0 at the first group, the misclosure spread
+                         c = 0 at the first group, the misclosure spread;
+                         the estimated steps scaled as in "estimate"
                          (a fusion that takes the along-track from the
                          input, an INS with a DVL, and the across-track
                          from the echoes; mixing the steps' axes in each
                          group's frame instead leaks one into the other)
-  input along, true across  the same with the truth's sway steps: what is
-                         left is the input's error at the first group
+  input along, true across  the same with the truth's sway steps, a
+                         reference: on an across-track drift what is left
+                         is about the input's error at the first group;
+                         where the input errs along-track too, that error
+                         stays and moves the normals the steps are read
+                         along
+  input surge, est sway (steps)  the steps' axes mixed instead: the
+                         input's surge steps and the estimated sway ones,
+                         chained in each group's frame (the input's sway
+                         error leaks into its surge steps as the frames
+                         turn)
   surge: kept drift      the truth plus the part of the surge errors that
                          follows the input's step errors (b x input error)
   surge: noise           the truth plus the rest of the surge errors
@@ -196,6 +206,7 @@ def main(argv):
         print("  %-28s  %8.3f  %9.3f" % ((name,) + errors(P, T, chain(P, st, closed))))
     print("  %-28s  %8.3f  %9.3f" % (("input along, est across",) + errors(P, T, across_only(P, N, Es, closed))))
     print("  %-28s  %8.3f  %9.3f" % (("input along, true across",) + errors(P, T, across_only(P, N, tr, closed))))
+    print("  %-28s  %8.3f  %9.3f" % (("input surge, est sway (steps)",) + errors(P, T, chain(P, np.c_[N[:, 0], Es[:, 1]], closed))))
     for L, lam in fits:
         C, sig = fit(P, N, Es, used, closed, int(L), float(lam))
         print("  %-28s  %8.3f  %9.3f   (residual rms %.3f / %.4f mm)"

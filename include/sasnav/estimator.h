@@ -232,10 +232,12 @@ typedef struct {
                               verdict's default gate; a constant, so
                               that verdict_contrast does not move the
                               estimates) where a feature stands out
-                              (the peak of S below over the error
-                              window at least 8 times its mean over
-                              the window; smoothed speckle peaks at
-                              2.5-5.6 times on the simulated seabeds;
+                              (the peak of |rho_p|^2 + |rho_q|^2
+                              smoothed over a fixed 5 cm, whatever
+                              this sets, over the error window at
+                              least 8 times its mean over the window;
+                              smoothed speckle peaks at 2.5-5.6 times
+                              on the simulated seabeds;
                               result.equalise_peak), the search
                               stages' criteria
                               (zeta and eta on the search grid: the
