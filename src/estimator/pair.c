@@ -156,7 +156,8 @@ static int level_init(sasnav_pair *pr, pair_level *lv, double pixel, int k, int 
     /* the search's levels (0, 1) hold the equalising weights */
     int equalises = o->equalise > 0 && lv - pr->level < 2;
     if (equalises) lv->eqw = malloc(sizeof(double) * np);
-    int gate_apart = equalises && o->equalise != EQUALISE_GATE_BLUR;
+    /* the gate reads level 1's peak only (make_levels) */
+    int gate_apart = equalises && lv - pr->level == 1 && o->equalise != EQUALISE_GATE_BLUR;
     if (gate_apart) lv->eq_gate = malloc(sizeof(double) * np);
     if (!lv->rho_p || !lv->rho_q || !lv->psi_p || !lv->psi_q || !lv->tmp || !lv->data_tmp ||
         !lv->cgls_work || !lv->tmp2 || !lv->data_tmp2 || !lv->cgls_work2 || !lv->mod_p || !lv->mod_q || !lv->blur_tmp || !lv->window ||

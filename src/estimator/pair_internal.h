@@ -54,8 +54,8 @@ typedef struct {
      * NULL elsewhere or when off) and the contrast of q's reconstruction
      * at the prior (their gate, with p's), and the peak of the weights'
      * smoothed intensity over its mean in the window (their other gate;
-     * the intensity smoothed at the gate's own scale in eq_gate where
-     * opts.equalise differs from it, NULL otherwise). */
+     * the intensity smoothed at the gate's own scale in eq_gate, at level
+     * 1 where opts.equalise differs from it, NULL otherwise). */
     double *eqw, *eq_gate;
     double contrast_q0;
     double eq_peak;
