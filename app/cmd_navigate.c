@@ -16,6 +16,7 @@
 
 /* getopt value of --equalise (no short option) */
 #define OPT_EQUALISE 1001
+#define OPT_ALONG_TRACK 1002
 
 static const char *help =
     "usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]\n"
@@ -29,7 +30,7 @@ static const char *help =
     "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
     "       sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]\n"
     "                       [--iterations N] [--closed] [--keep-length] [--align-heading]\n"
-    "                       [--estimate-yaw] [--k K] [--i I] [--cross-extent M]\n"
+    "                       [--along-track echoes|input] [--estimate-yaw] [--k K] [--i I] [--cross-extent M]\n"
     "                       [--range-extent M] [--threads N] [--json] -o nav.h5\n"
     "\n"
     "Estimates the displacement of every consecutive ping pair, composes them\n"
@@ -168,6 +169,13 @@ static const char *help =
     "                    the turns are reported, with a warning when their\n"
     "                    mean would move the track's end by over 1 mm (what a\n"
     "                    crab or a heading bias would do to every step)\n"
+    "  --along-track input  keep the input's along-track (a DVL's, an INS's)\n"
+    "                    and correct only the across-track from the echoes:\n"
+    "                    each group moves along its normal by the chained\n"
+    "                    steps' sway; yaws stay the input's. Removes an\n"
+    "                    across-track drift down to the first group's own\n"
+    "                    error, keeps an along-track one (implies\n"
+    "                    --align-heading; default echoes: both axes)\n"
     "  --estimate-yaw    estimate each step's yaw too (default: held at the\n"
     "                    input navigation's: an omnidirectional group shows\n"
     "                    its yaw only through its length)\n"
@@ -427,6 +435,7 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
         json_object_set_new(root, "interleave", json_integer(vn.interleave));
         json_object_set_new(root, "closed", json_boolean(vn.closed));
         json_object_set_new(root, "align_heading", json_boolean(vn.align_heading));
+        json_object_set_new(root, "along_track", json_string(vn.along_input ? "input" : "echoes"));
         if (vn.align_heading) {
             json_t *turns = json_array();
             for (int g = 0; g < vn.n_groups; g++) json_array_append_new(turns, json_real(vn.layout_turn[g]));
@@ -480,6 +489,9 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
                    1e3 * vn.misclosure.x, 1e3 * vn.misclosure.y, 1e3 * vn.misclosure.theta, vn.n_pairs);
         if (vn.length_scale != 1.0)
             printf("steps scaled by %.5f to the input navigation's length\n", vn.length_scale);
+        if (vn.along_input)
+            printf("along track kept from the input; across track corrected by the chained steps' "
+                   "sway\n");
         if (vn.align_heading)
             printf("layouts turned onto the headings by %+.3f mrad mean, %.3f mrad rms (a constant "
                    "turn of the mean: %.3f mm at the end of the track)\n",
@@ -493,7 +505,13 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
      * layouts' spacing), otherwise all of it. */
     const char *kept = vn.align_heading ? "along track: the layouts' spacing is the input's"
                                         : "their layouts are the input's";
-    if (vn.length_scale != 1.0)
+    if (vn.along_input)
+        fprintf(stderr,
+                "sasnav navigate: warning: --along-track input keeps the input's along-track drift "
+                "and its across-track error at the first group (on a curved track a change of "
+                "radius that no step sees); the chained sway steps' errors add up along the run "
+                "(docs/airsas.md)\n");
+    else if (vn.length_scale != 1.0)
         fprintf(stderr,
                 "sasnav navigate: warning: the steps were scaled by %.5f to the input navigation's "
                 "length; virtual-array steps keep a smooth drift of the input (%s) and their errors "
@@ -530,6 +548,7 @@ int cmd_navigate(int argc, char **argv)
         {"iterations", required_argument, 0, 'I'}, {"estimate-yaw", no_argument, 0, 'W'},
         {"interleave", required_argument, 0, 'G'}, {"closed", no_argument, 0, 'Z'},
         {"keep-length", no_argument, 0, 'K'}, {"align-heading", no_argument, 0, 'H'},
+        {"along-track", required_argument, 0, OPT_ALONG_TRACK},
         {"gpu", no_argument, 0, 'g'},        {"eta-max", required_argument, 0, 'e'},
         {"final", required_argument, 0, 'c'},  {"search-grid", required_argument, 0, 'P'},
         {"coincidence", required_argument, 0, 'J'}, {"compact-contrast", required_argument, 0, 'Q'},
@@ -544,6 +563,7 @@ int cmd_navigate(int argc, char **argv)
     int json = 0, opt, anchor_truth = 0, have_first = 0, n_general = 0, estimate_yaw = 0;
     long vk = 0, vstride = 0, viters = 2, vinter = 1;
     int have_cross = 0, have_range = 0, have_coinc = 0, have_cc = 0, closed = 0, keep_length = 0, align_heading = 0;
+    int along_input = -1; /* --along-track: -1 not given, 0 echoes, 1 input */
     double first[3] = {0, 0, 0};
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
@@ -569,6 +589,11 @@ int cmd_navigate(int argc, char **argv)
         case 'Z': closed = 1; break;
         case 'K': keep_length = 1; break;
         case 'H': align_heading = 1; break;
+        case OPT_ALONG_TRACK:
+            if (!strcmp(optarg, "echoes")) along_input = 0;
+            else if (!strcmp(optarg, "input")) along_input = 1;
+            else return cli_usage("navigate", "--along-track needs echoes or input (got '%s')", optarg);
+            break;
         case 'G':
             if (cli_parse_int(optarg, 1, 1000, &vinter)) return cli_usage("navigate", "--interleave needs 1..1000");
             break;
@@ -687,14 +712,18 @@ int cmd_navigate(int argc, char **argv)
         return cli_usage("navigate", "--first-pose and --anchor-truth exclude each other");
     const char *input = argv[optind];
     if (!vk && (vstride || viters != 2 || estimate_yaw || vinter != 1 || closed || keep_length ||
-                align_heading))
+                align_heading || along_input >= 0))
         return cli_usage("navigate", "--interleave, --stride, --iterations, --closed, --keep-length, "
-                                     "--align-heading and --estimate-yaw need --virtual-array");
+                                     "--align-heading, --along-track and --estimate-yaw need "
+                                     "--virtual-array");
+    if (along_input == 1 && estimate_yaw)
+        return cli_usage("navigate", "--along-track input keeps the input's yaws: it excludes "
+                                     "--estimate-yaw");
     if (vk) {
         if (n_general)
             return cli_usage("navigate", "--virtual-array takes only --interleave, --stride, "
                                          "--iterations, --closed, --keep-length, --align-heading, "
-                                         "--estimate-yaw, --k, --i, --cross-extent, --range-extent, "
+                                         "--along-track, --estimate-yaw, --k, --i, --cross-extent, --range-extent, "
                                          "--coincidence, --compact-contrast, --threads and --json");
         if (cli_mpi_size() > 1)
             return cli_usage("navigate", "--virtual-array runs in one process (use --threads)");
@@ -705,7 +734,8 @@ int cmd_navigate(int argc, char **argv)
         vo.interleave = (int)vinter;
         vo.closed = closed;
         vo.keep_length = keep_length;
-        vo.align_heading = align_heading;
+        vo.align_heading = align_heading || along_input == 1;
+        vo.along_input = along_input == 1;
         vo.iterations = (int)viters;
         vo.nthreads = (int)threads;
         vo.pair.k = (int)k;

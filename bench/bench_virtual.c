@@ -8,6 +8,7 @@
  *                      [--extent M] [--box SURGE,SWAY,YAW]
  *                      [--iterations N] [--interleave M] [--free-yaw]
  *                      [--motion-rms M] [--write-nav PREFIX] [--closed] [--keep-length]
+ *                      [--align-heading] [--along-input]
  *                      [--file run.h5 [--drift MM]] [--quiet]
  *                      [--plot PREFIX] [--refine | --refine-only [--sweeps N] [--cg N] [--damping X]
  *                       [--refine-pixel M] [--refine-half M] [--surge-range M] [--sway-range M]]
@@ -26,7 +27,9 @@
  * and sway, 2.5 and 1.5 cycles over the run's pings, zero at ping 0).
  *
  * --keep-length: the steps scaled to the input navigation's length
- * (virtual.h). --plot PREFIX: PREFIX-steps.png (each step's error) and
+ * (virtual.h). --along-input: the input's along-track kept, the echoes'
+ * sway steps correct the across-track (virtual.h along_input; implies
+ * --align-heading). --plot PREFIX: PREFIX-steps.png (each step's error) and
  * PREFIX-nav.png (each ping's position error). --refine: the multi-ping
  * refinement (refine.h, leave-one-out scenes on a square grid round the
  * circle's centre) after the virtual navigation; --refine-only: instead of
@@ -225,7 +228,7 @@ int main(int argc, char **argv)
     double snr = 30.0, pixel = 0, extent = 0.3, drift_mm = 5.0, motion_rms = -1;
     double box[3] = {0.01, 0.01, 0.02};
     int k = 4, stride = 0, n_pings = 0, first = 0, threads = 0, quiet = 0, free_yaw = 0, iterations = 2, interleave = 1, closed = 0, keep_length = 0,
-        align_heading = 0;
+        align_heading = 0, along_input = 0;
     const char *file = NULL, *write_prefix = NULL, *plot_prefix = NULL, *drift_shape = "smooth",
                *dump_file = NULL;
     refine_cfg rf = {0, 0, 4, 0, 0.0025, 0.3, 0.012, 0.006, 0};
@@ -264,6 +267,8 @@ int main(int argc, char **argv)
             dump_file = argv[++a];
         } else if (!strcmp(argv[a], "--align-heading")) {
             align_heading = 1;
+        } else if (!strcmp(argv[a], "--along-input")) {
+            along_input = align_heading = 1;
         } else if (!strcmp(argv[a], "--interleave") && a + 1 < argc) {
             interleave = atoi(argv[++a]);
         } else if (!strcmp(argv[a], "--iterations") && a + 1 < argc) {
@@ -301,7 +306,7 @@ int main(int argc, char **argv)
             fprintf(stderr, "usage: bench_virtual [--seeds S0 N] [--snr DB|inf] [--k K] [--stride S]\n"
                             "         [--pings N] [--first P] [--threads T] [--pixel M] [--extent M]\n"
                             "         [--box SURGE,SWAY,YAW] [--iterations N] [--interleave M] [--closed] [--keep-length]\n"
-                            "         [--align-heading]\n"
+                            "         [--align-heading] [--along-input]\n"
                             "         [--free-yaw] [--motion-rms M] [--file run.h5 [--drift MM]\n"
                             "         [--drift-shape smooth|sway|surge|alternate|ramp]] [--write-nav PREFIX]\n"
                             "         [--plot PREFIX] [--refine | --refine-only] [--sweeps N] [--cg N] [--damping X]\n"
@@ -384,6 +389,7 @@ int main(int argc, char **argv)
         vo.closed = closed;
         vo.keep_length = keep_length;
         vo.align_heading = align_heading;
+        vo.along_input = along_input;
         if (rf.only) {
             /* The refinement alone, from the input navigation (errors in
              * the world frame: no alignment). */

@@ -139,6 +139,33 @@ else
     cat "$T/circ.err" >&2
     fail "simulate circular"
 fi
+# --along-track input: reported, and it implies --align-heading (the
+# geometry of the correction is tested in tests/test_virtual.c).
+if [ -s "$T/circ.h5" ]; then
+    if "$CLI" navigate "$T/circ.h5" --virtual-array 4 --iterations 1 --along-track input --json \
+        -o "$T/anav.h5" > "$T/anav.json" 2> "$T/anav.err"; then
+        [ -s "$T/anav.h5" ] || fail "--along-track input: no navigation file"
+        grep -q "keeps the input's along-track drift" "$T/anav.err" ||
+            fail "--along-track input: no warning of what it keeps"
+        if [ -x /usr/bin/python3 ]; then
+            /usr/bin/python3 - "$T/anav.json" "$T/vnav.json" <<'EOF' || fail "--along-track input: JSON content"
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["along_track"] == "input" and d["align_heading"] is True, d
+assert json.load(open(sys.argv[2]))["along_track"] == "echoes"
+EOF
+        fi
+    else
+        cat "$T/anav.err" >&2
+        fail "navigate --along-track input"
+    fi
+fi
+"$CLI" navigate "$T/run.h5" --along-track input -o "$T/x.h5" > /dev/null 2>&1
+[ $? -eq 2 ] || fail "--along-track without --virtual-array: not a usage error"
+"$CLI" navigate "$T/circ.h5" --virtual-array 4 --along-track dvl -o "$T/x.h5" > /dev/null 2> "$T/at.err"
+[ $? -eq 2 ] && grep -q "echoes or input" "$T/at.err" || fail "--along-track dvl: not a clear usage error"
+"$CLI" navigate "$T/circ.h5" --virtual-array 4 --along-track input --estimate-yaw -o "$T/x.h5" > /dev/null 2>&1
+[ $? -eq 2 ] || fail "--along-track input with --estimate-yaw: not a usage error"
 "$CLI" navigate "$T/run.h5" --stride 2 -o "$T/x.h5" > /dev/null 2>&1
 [ $? -eq 2 ] || fail "--stride without --virtual-array: not a usage error"
 "$CLI" navigate "$T/run.h5" --virtual-array 4 --method dpca -o "$T/x.h5" > /dev/null 2>&1

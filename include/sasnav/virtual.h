@@ -125,6 +125,24 @@ typedef struct {
                                with this the sway part of the drift is
                                measured. Wrong where the vehicle crabs
                                (default 0) */
+    int along_input;        /* 1: the input navigation's along-track is
+                               kept and the echoes correct only the
+                               across-track (the field's practice with a
+                               single-channel sonar: along track from a DVL
+                               or an INS, across track from the echoes):
+                               group g's centroid moves along its normal
+                               (its input yaw + 90 degrees) by c_g, chained
+                               from the used steps' sway, (X_h - X_g) . n_g
+                               = the step's sway (nominal + (c_h cos(yaw_h -
+                               yaw_g) - c_g) in group g's frame), c_0 = 0
+                               (closed: the misclosure spread evenly); the
+                               yaws stay the input's. Use it with
+                               align_heading, without which the steps'
+                               sway keeps the input's drift. Removes an
+                               across-track drift down to the first
+                               group's own error; an along-track drift
+                               stays (measured: docs/airsas.md, section 3)
+                               (default 0) */
 } sasnav_virtual_opts;
 
 void sasnav_virtual_default_opts(sasnav_virtual_opts *opts);
@@ -147,13 +165,18 @@ typedef struct {
     int n_pairs;              /* n_groups - 1 (n_groups when closed) */
     int closed;
     int align_heading;        /* the layouts were turned onto the headings */
+    int along_input;          /* the along-track was kept from the input
+                                 (along_input): centroid[g] - centroid_in[g]
+                                 lies along group g's normal */
     sasnav_pose misclosure;   /* closed: where the chained steps ended
                                  minus where they started (world frame,
-                                 before it was spread) */
+                                 before it was spread; along_input: the
+                                 across-track correction's, c_n n_0, yaw 0) */
     sasnav_virtual_pair *pairs;
     sasnav_pose *centroid_in; /* n_groups: centroids from the input navigation */
     sasnav_pose *centroid;    /* n_groups: estimated (the first one anchored
-                                 at its input value) */
+                                 at its input value; along_input: each moved
+                                 from its input value along its normal) */
     double *layout_turn;      /* n_groups: the angle (rad, counter-clockwise)
                                  by which align_heading turned each group's
                                  layout in the last pass (0 without it) */

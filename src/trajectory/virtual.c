@@ -197,6 +197,43 @@ static int group_layout(const vctx *c, const sasnav_ping_pose *nav, int first, i
                                centroid, turn);
 }
 
+/* along_input: the groups' input centroids moved along their normals
+ * only. With X_g = C_g + c_g n_g (C_g the input centroid, n_g its normal),
+ * the step from g to h = g + 1 read in g's frame has the sway (X_h - X_g)
+ * . n_g = nominal sway + c_h cos(yaw_h - yaw_g) - c_g; setting it to the
+ * used step's sway chains c from c_0 = 0. Closed: c should come back to 0
+ * after the last step; its end value is spread evenly over the groups, as
+ * the pose chain spreads its misclosure. The yaws stay the input's. */
+static void across_only(const vctx *c, sasnav_virtual_navigation *out)
+{
+    int ng = c->n_groups;
+    double cg = 0.0, end = 0.0;
+    for (int g = 0; g < c->n_pairs; g++) {
+        int h = (g + 1) % ng;
+        const sasnav_virtual_pair *vp = &out->pairs[g];
+        double turn = cos(sasnav_wrap_angle(out->centroid_in[h].theta - out->centroid_in[g].theta));
+        double ch = (vp->step.y - vp->nominal.y + cg) / turn;
+        sasnav_pose n = out->centroid_in[g];
+        out->centroid[g] = (sasnav_pose){n.x - sin(n.theta) * cg, n.y + cos(n.theta) * cg, n.theta};
+        if (h == 0) end = ch;
+        else if (g + 1 == c->n_pairs) {
+            sasnav_pose m = out->centroid_in[h]; /* the open chain's last group */
+            out->centroid[h] = (sasnav_pose){m.x - sin(m.theta) * ch, m.y + cos(m.theta) * ch, m.theta};
+        }
+        cg = ch;
+    }
+    if (c->closed) {
+        sasnav_pose z = out->centroid_in[0];
+        out->misclosure = (sasnav_pose){-sin(z.theta) * end, cos(z.theta) * end, 0.0};
+        for (int g = 1; g < ng; g++) {
+            double f = (double)g / ng * end;
+            sasnav_pose m = out->centroid_in[g];
+            out->centroid[g].x += sin(m.theta) * f;
+            out->centroid[g].y -= cos(m.theta) * f;
+        }
+    }
+}
+
 /* One pass over the pairs with `nav` as the input navigation: layouts,
  * nominal and true displacements, the estimates (opts->nthreads at once),
  * and the chained centroids (centroid[0] = centroid_in[0]). */
@@ -297,6 +334,10 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
         out->turn_rms = sqrt(out->turn_rms);
         for (int g = 0; g < c->n_pairs; g++) length += hypot(out->pairs[g].step.x, out->pairs[g].step.y);
         out->turn_exposure = fabs(out->turn_mean) * length;
+    }
+    if (opts->along_input) {
+        across_only(c, out);
+        return SASNAV_OK;
     }
     out->centroid[0] = out->centroid_in[0];
     for (int g = 0; g + 1 < ng; g++)
@@ -420,6 +461,7 @@ int sasnav_navigate_virtual(const sasnav_run *run, const sasnav_virtual_opts *op
     out->n_pairs = c.n_pairs;
     out->closed = c.closed;
     out->align_heading = opts->align_heading != 0;
+    out->along_input = opts->along_input != 0;
     out->pairs = calloc((size_t)ng, sizeof *out->pairs);
     out->centroid_in = calloc((size_t)ng, sizeof *out->centroid_in);
     out->centroid = calloc((size_t)ng, sizeof *out->centroid);
