@@ -389,6 +389,54 @@ static void test_align_crab(void)
     sasnav_run_free(run);
 }
 
+/* along_input on a closed loop (the full circle, 360 pings, disjoint
+ * groups of 2, one pass, coarse settings): the across-track corrections
+ * c_g chained from the steps as virtual.h defines them (c_0 = 0, c_h =
+ * (sway step - nominal sway + c_g) / cos(yaw_h - yaw_g)), their end value
+ * c_n (which should be 0 again) spread evenly: group g moves by c_g - (g /
+ * n) c_n along its normal; the misclosure is c_n n_0 (the coarse steps'
+ * sway errors leave c_n = -10 mm, so the spread is exercised). */
+static void test_along_closed(void)
+{
+    sasnav_run *run = circle_run(360);
+    if (!run) return;
+    sasnav_virtual_opts vc;
+    circle_opts(&vc, 2);
+    vc.closed = 1;
+    vc.along_input = 1;
+    vc.pair.k = vc.pair.coarse_k = 2;
+    vc.pair.i = vc.pair.coarse_i = 1;
+    sasnav_virtual_navigation vs;
+    CHECK_OK(sasnav_navigate_virtual(run, &vc, &vs));
+    double *cg = vs.centroid ? malloc(sizeof *cg * (size_t)(vs.n_groups + 1)) : NULL;
+    if (cg) {
+        int ng = vs.n_groups;
+        double worst = 0;
+        cg[0] = 0.0;
+        for (int g = 0; g < ng; g++) {
+            const sasnav_virtual_pair *vp = &vs.pairs[g];
+            double turn = vs.centroid_in[(g + 1) % ng].theta - vs.centroid_in[g].theta;
+            cg[g + 1] = (vp->step.y - vp->nominal.y + cg[g]) / cos(turn);
+        }
+        for (int g = 0; g < ng; g++) {
+            sasnav_pose in = vs.centroid_in[g], e = vs.centroid[g];
+            double c = cg[g] - (double)g / ng * cg[ng];
+            worst = fmax(worst, fabs(e.x - (in.x - sin(in.theta) * c)) + fabs(e.y - (in.y + cos(in.theta) * c)) +
+                                    fabs(e.theta - in.theta));
+        }
+        sasnav_pose z = vs.centroid_in[0];
+        double mis = fabs(vs.misclosure.x + sin(z.theta) * cg[ng]) + fabs(vs.misclosure.y - cos(z.theta) * cg[ng]) +
+                     fabs(vs.misclosure.theta);
+        printf("  along input, closed loop: misclosure %.3f mm across, spread over %d groups\n", 1e3 * cg[ng], ng);
+        CHECK(worst < 1e-12 && mis < 1e-12 && fabs(cg[ng]) > 1e-5,
+              "along_input closed: centroids off the definition by %g, misclosure by %g (c_n %g)", worst, mis,
+              cg[ng]);
+        free(cg);
+    }
+    sasnav_virtual_navigation_free(&vs);
+    sasnav_run_free(run);
+}
+
 /* along_input: the input's along-track kept, the across-track corrected
  * by the chained steps' sway. The input navigation of a noise-free circle
  * (12 pings, interleaved groups of 3, 7 pairs) carries an across-track
@@ -474,5 +522,6 @@ int main(void)
     test_align_heading();
     test_align_crab();
     test_along_input();
+    test_along_closed();
     return test_summary("test_virtual");
 }
