@@ -266,8 +266,9 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                          [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5
          sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]
                          [--iterations N] [--closed] [--keep-length] [--align-heading]
-                         [--estimate-yaw] [--k K] [--i I] [--cross-extent M]
-                         [--range-extent M] [--threads N] [--json] -o nav.h5
+                         [--along-track echoes|input] [--estimate-yaw] [--k K] [--i I]
+                         [--cross-extent M] [--range-extent M] [--threads N] [--json]
+                         -o nav.h5
   
   Estimates the displacement of every consecutive ping pair, composes them
   into a trajectory starting at the run's nominal first ping, aligns it to
@@ -405,6 +406,13 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       the turns are reported, with a warning when their
                       mean would move the track's end by over 1 mm (what a
                       crab or a heading bias would do to every step)
+    --along-track input  keep the input's along-track (a DVL's, an INS's)
+                      and correct only the across-track from the echoes:
+                      each group moves along its normal by the chained
+                      steps' sway; yaws stay the input's. Removes an
+                      across-track drift down to the first group's own
+                      error, keeps an along-track one (implies
+                      --align-heading; default echoes: both axes)
     --estimate-yaw    estimate each step's yaw too (default: held at the
                       input navigation's: an omnidirectional group shows
                       its yaw only through its length)
