@@ -28,6 +28,8 @@ from ._core import (
     Run,
     StreamedRun,
     Scenario,
+    VirtualNavigation,
+    VirtualPair,
     SensorArray,
     System,
     centroids,
@@ -37,6 +39,7 @@ from ._core import (
     library_version,
     navigate,
     navigate_part,
+    navigate_virtual,
     open_run,
     ping_poses,
     read_image,
@@ -56,4 +59,5 @@ __all__ = [
     "Scenario", "SensorArray", "System", "centroids", "default_grid", "estimate_pair", "image",
     "library_version", "navigate", "ping_poses", "read_image", "read_nav", "read_run",
     "scenario", "simulate", "write_image", "write_nav", "write_run",
+    "VirtualNavigation", "VirtualPair", "navigate_virtual",
 ]

@@ -486,11 +486,68 @@ class NavigationC(Structure):  # navigate.h: struct sasnav_navigation
 
 
 # Every mirrored struct (checked by tests/test_layout.py).
+class VirtualOpts(Structure):  # virtual.h
+    _c_name_ = "sasnav_virtual_opts"
+    _fields_ = [
+        ("k", c_int),
+        ("interleave", c_int),
+        ("stride", c_int),
+        ("pair", PairOpts),
+        ("closed", c_int),
+        ("iterations", c_int),
+        ("nthreads", c_int),
+        ("keep_length", c_int),
+        ("align_heading", c_int),
+        ("along_input", c_int),
+    ]
+
+
+class VirtualPair(Structure):  # virtual.h
+    _c_name_ = "sasnav_virtual_pair"
+    _fields_ = [
+        ("first_p", c_int),
+        ("first_q", c_int),
+        ("nominal", Pose),
+        ("truth", Pose),
+        ("est", PairResult),
+        ("used", c_int),
+        ("step", Pose),
+    ]
+
+
+class VirtualNavigationC(Structure):  # virtual.h: sasnav_virtual_navigation
+    _c_name_ = "sasnav_virtual_navigation"
+    _fields_ = [
+        ("n_pings", c_int),
+        ("k", c_int),
+        ("stride", c_int),
+        ("interleave", c_int),
+        ("n_groups", c_int),
+        ("n_pairs", c_int),
+        ("closed", c_int),
+        ("align_heading", c_int),
+        ("along_input", c_int),
+        ("misclosure", Pose),
+        ("pairs", POINTER(VirtualPair)),
+        ("centroid_in", POINTER(Pose)),
+        ("centroid", POINTER(Pose)),
+        ("layout_turn", POINTER(c_double)),
+        ("turn_mean", c_double),
+        ("turn_rms", c_double),
+        ("turn_exposure", c_double),
+        ("nav", POINTER(PingPose)),
+        ("n_fallback", c_int),
+        ("length_scale", c_double),
+        ("iterations", c_int),
+        ("seconds", c_double),
+    ]
+
+
 STRUCTS = [
     Pose, PingPose, ChannelSizeC, SensorArrayC, SystemC, Window, AidingC, PingSourceC, RunC, GridC, OpOpts, FfbpOpts,
     CglsOpts, SceneC, RippleParams, TrajectoryParams, AidingParams, ScenarioC,
     PairOpts, PairCandidate, PairResult, DpcaOpts, NavigateProgress,
-    NavigateOpts, NavigatePair, NavigationC,
+    NavigateOpts, NavigatePair, NavigationC, VirtualOpts, VirtualPair, VirtualNavigationC,
 ]
 
 # Constants and enum values of the headers the binding relies on (checked by
@@ -523,7 +580,7 @@ CONSTANTS = {
 # generated version.h).
 HEADERS = [
     "error.h", "model.h", "geometry.h", "run.h", "op.h", "image.h", "scene.h",
-    "sim.h", "estimator.h", "dpca.h", "navigate.h", "io.h", "config.h",
+    "sim.h", "estimator.h", "dpca.h", "navigate.h", "io.h", "config.h", "virtual.h",
 ]
 
 _i, _d, _v = c_int, c_double, None
@@ -615,6 +672,10 @@ PROTOTYPES = {
     "sasnav_navigate": (_i, [_P(RunC), _P(NavigateOpts), _P(NavigationC)]),
     "sasnav_navigate_part": (_i, [_P(RunC), _P(NavigateOpts), _i, _i, _P(_P(PairRecord)), _P(_i)]),
     "sasnav_navigation_free": (_v, [_P(NavigationC)]),
+    # virtual.h
+    "sasnav_virtual_default_opts": (_v, [_P(VirtualOpts)]),
+    "sasnav_navigate_virtual": (_i, [_P(RunC), _P(VirtualOpts), _P(VirtualNavigationC)]),
+    "sasnav_virtual_navigation_free": (_v, [_P(VirtualNavigationC)]),
 }
 
 

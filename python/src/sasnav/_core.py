@@ -1348,6 +1348,135 @@ def navigate(run, *, pair=None, dpca=None, progress=None, done=None, **opts):
 
 
 # ---------------------------------------------------------------------------
+# Virtual arrays (single-channel sonars)
+
+
+@dataclass
+class VirtualPair:
+    """One pair of virtual pings (sasnav_virtual_pair): the groups' first
+    pings p and q, the nominal displacement of q's group centroid in p's
+    (from the input navigation), the truth (None without one), the
+    estimate (PairEstimate; its `displacement` is the estimated step),
+    whether the step went into the navigation (`used`: verdict "ok";
+    otherwise the input's step was kept) and the step used (Pose)."""
+
+    p: int
+    q: int
+    nominal: Pose
+    truth: Optional[Pose]
+    estimate: PairEstimate
+    used: bool
+    step: Pose
+
+
+@dataclass(eq=False)
+class VirtualNavigation:
+    """The result of navigate_virtual() (sasnav_virtual_navigation): the
+    estimated ping poses `nav` (PING_POSE_DTYPE), the groups' centroids
+    from the input (`centroid_in`) and estimated (`centroid`, POSE_DTYPE
+    [n_groups]), the pairs, the layouts' turns (`layout_turn`, rad, with
+    align_heading), their mean, rms and exposure (m), the loop's
+    misclosure (closed), the steps' length scale (keep_length), the steps
+    that kept the input's (`n_fallback`), and which axis came from where
+    (`along_track`: "echoes" or "input")."""
+
+    n_pings: int
+    k: int
+    stride: int
+    interleave: int
+    closed: bool
+    align_heading: bool
+    along_track: str
+    nav: np.ndarray
+    centroid_in: np.ndarray
+    centroid: np.ndarray
+    pairs: List[VirtualPair]
+    layout_turn: np.ndarray
+    turn_mean: float
+    turn_rms: float
+    turn_exposure: float
+    misclosure: Optional[Pose]
+    length_scale: float
+    n_fallback: int
+    iterations: int
+    seconds: float
+
+
+def navigate_virtual(run, k=4, *, interleave=1, stride=0, closed=False, iterations=2,
+                     keep_length=False, align_heading=False, along_track="echoes",
+                     estimate_yaw=False, threads=0, pair=None, **opts):
+    """Navigates a run by virtual pings of k pings (as `sasnav navigate
+    --virtual-array K`; docs/navigation.md, "Virtual arrays"): every
+    interleave-th ping makes a group, a group starts every `stride` pings
+    (0: k for interleave 1, else 1); the displacement between consecutive
+    groups is estimated and chained; closed: the track closes on itself (a
+    turntable); keep_length: the steps scaled to the input's length;
+    align_heading: the layouts turned onto the headings; along_track
+    "input": the input's along-track kept and the across-track corrected
+    from the steps' sway (implies align_heading; excludes estimate_yaw);
+    estimate_yaw: each step's yaw estimated (default: the input's). As the
+    CLI, the estimator's grid is centred at the run's range of interest,
+    0.35 x that range square (cross_extent, range_extent), and its search
+    box +-0.7 ping spacings; any other keyword that names a field of
+    sasnav_pair_opts, and the entries of the dict `pair`, go to the
+    estimator. Returns a VirtualNavigation."""
+    _check_navigable(run)
+    if along_track not in ("echoes", "input"):
+        raise ValueError(f"along_track is 'echoes' or 'input' (got {along_track!r})")
+    along = along_track == "input"
+    if along and estimate_yaw:
+        raise ValueError("along_track='input' keeps the input's yaws: it excludes estimate_yaw")
+    L = lib()
+    vo = C.VirtualOpts()
+    L.sasnav_virtual_default_opts(ctypes.byref(vo))
+    _set_fields(vo, {"k": k, "interleave": interleave, "stride": stride, "closed": bool(closed),
+                     "iterations": iterations, "nthreads": threads, "keep_length": bool(keep_length),
+                     "align_heading": bool(align_heading) or along, "along_input": along}, "virtual")
+    po = vo.pair
+    roi = run.range_of_interest
+    po.range = roi
+    po.cross_extent = po.range_extent = 0.35 * roi
+    step = run.ping_spacing if run.ping_spacing > 0 else 0.01
+    po.fix_yaw = 0 if estimate_yaw else 1
+    po.box = C.Pose(0.7 * step, 0.7 * step, 0.02 if po.fix_yaw else 0.0)
+    pair_opts = dict(pair or {})
+    pair_opts.update(opts)
+    if "threads" in pair_opts or "nthreads" in pair_opts:
+        raise ValueError("navigate_virtual: give threads as its own keyword (pairs run one thread each)")
+    _set_fields(po, pair_opts, "pair")
+    if "coarse_k" not in pair_opts:
+        po.coarse_k = po.k
+    if "coarse_i" not in pair_opts:
+        po.coarse_i = po.i
+    out = C.VirtualNavigationC()
+    with _run_arg(run) as r:
+        check(L.sasnav_navigate_virtual(r, ctypes.byref(vo), ctypes.byref(out)))
+    try:
+        ng, n = out.n_groups, out.n_pings
+        has_truth = run.truth is not None
+        pairs = []
+        for j in range(out.n_pairs):
+            vp = out.pairs[j]
+            nom = _pose(vp.nominal)
+            t = _pose(vp.truth) if has_truth else None
+            # the estimate's truth is the true motion error (true - nominal step)
+            terr = None if t is None else Pose(t.x - nom.x, t.y - nom.y, t.theta - nom.theta)
+            est = _estimate_from_c(vp.est, vp.first_p, vp.first_q, nom, terr)
+            pairs.append(VirtualPair(vp.first_p, vp.first_q, nom, t, est, bool(vp.used), _pose(vp.step)))
+        return VirtualNavigation(
+            n, out.k, out.stride, out.interleave, bool(out.closed), bool(out.align_heading),
+            "input" if out.along_input else "echoes",
+            _copy_out(_addr(out.nav), PING_POSE_DTYPE, n),
+            _copy_out(_addr(out.centroid_in), POSE_DTYPE, ng),
+            _copy_out(_addr(out.centroid), POSE_DTYPE, ng), pairs,
+            _copy_out(_addr(out.layout_turn), np.float64, ng), out.turn_mean, out.turn_rms,
+            out.turn_exposure, _pose(out.misclosure) if out.closed else None, out.length_scale,
+            out.n_fallback, out.iterations, out.seconds)
+    finally:
+        L.sasnav_virtual_navigation_free(ctypes.byref(out))
+
+
+# ---------------------------------------------------------------------------
 # Imaging
 
 
