@@ -426,7 +426,7 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
         fprintf(stderr,
                 "sasnav navigate: warning: --align-heading turned the layouts by %+.2f mrad on "
                 "average; if that is a crab or a heading bias rather than a drift of the input, "
-                "every step is turned by it (up to %.1f mm at the end of the track)\n",
+                "every step is turned by it (moving the track by up to %.1f mm)\n",
                 1e3 * vn.turn_mean, 1e3 * vn.turn_exposure);
     if (json) {
         json_t *root = json_object(), *pairs = json_array();
@@ -495,7 +495,7 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
                    "sway\n");
         if (vn.align_heading)
             printf("layouts turned onto the headings by %+.3f mrad mean, %.3f mrad rms (a constant "
-                   "turn of the mean: %.3f mm at the end of the track)\n",
+                   "turn of the mean would move the track by up to %.3f mm)\n",
                    1e3 * vn.turn_mean, 1e3 * vn.turn_rms, 1e3 * vn.turn_exposure);
         printf("%d pairs in %.2f s (%.2f s per pair), %d flagged\n", vn.n_pairs, vn.seconds,
                vn.n_pairs > 0 ? vn.seconds / (vn.n_pairs * vn.iterations) : 0.0, n_flagged);

@@ -181,11 +181,18 @@ typedef struct {
                                  by which align_heading turned each group's
                                  layout in the last pass (0 without it) */
     double turn_mean, turn_rms; /* their mean and rms over the groups */
-    double turn_exposure;     /* |turn_mean| times the chained track's length
-                                 (m): the end-point error that a constant
-                                 crab or heading bias of that size would
-                                 leave, since align_heading turns every step
-                                 by it (0 without align_heading). A sideways
+    double turn_exposure;     /* the largest position error (m) that a
+                                 constant crab or heading bias of turn_mean
+                                 would leave in the chained centroids, since
+                                 align_heading turns every step by it:
+                                 |turn_mean| times the largest distance of a
+                                 centroid from the first (the track's length
+                                 on a straight track, at most the diameter of
+                                 a closed circle); along_input: times the
+                                 length chained to a group (a closed loop's
+                                 spread takes out the part proportional to
+                                 the group's index: nearly all of it with
+                                 even steps). 0 without align_heading. A sideways
                                  drift that returns turns the layouts both
                                  ways (mean 0); a large exposure means a
                                  constant turn: a crab, a heading bias, a

@@ -234,6 +234,34 @@ static void across_only(const vctx *c, sasnav_virtual_navigation *out)
     }
 }
 
+/* turn_exposure: the largest position error that a turn of every step by
+ * turn_mean (a crab, a heading bias) leaves in the chained centroids.
+ * Chained poses: the chain turned about group 0, so |turn_mean| times the
+ * largest distance of a centroid from group 0's (the track's length on a
+ * straight track; at most the diameter on a closed circle, whose chain
+ * still closes). along_input: every step's sway grows by turn_mean times
+ * its length, so c_g by turn_mean times the length chained to g; a closed
+ * loop's spread takes out the part proportional to g. */
+static void turn_exposure(const vctx *c, sasnav_virtual_navigation *out)
+{
+    int ng = c->n_groups;
+    double worst = 0.0;
+    if (c->o->along_input) {
+        double total = 0.0, run_len = 0.0;
+        for (int g = 0; g < c->n_pairs; g++) total += hypot(out->pairs[g].step.x, out->pairs[g].step.y);
+        for (int g = 0; g < ng; g++) {
+            double e = run_len - (c->closed ? (double)g / ng * total : 0.0);
+            worst = fmax(worst, fabs(e));
+            if (g < c->n_pairs) run_len += hypot(out->pairs[g].step.x, out->pairs[g].step.y);
+        }
+    } else {
+        for (int g = 1; g < ng; g++)
+            worst = fmax(worst, hypot(out->centroid[g].x - out->centroid[0].x,
+                                      out->centroid[g].y - out->centroid[0].y));
+    }
+    out->turn_exposure = fabs(out->turn_mean) * worst;
+}
+
 /* One pass over the pairs with `nav` as the input navigation: layouts,
  * nominal and true displacements, the estimates (opts->nthreads at once),
  * and the chained centroids (centroid[0] = centroid_in[0]). */
@@ -326,17 +354,15 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
      * crab or a heading bias would contribute (the steps turned alike). */
     out->turn_mean = out->turn_rms = out->turn_exposure = 0.0;
     if (opts->align_heading) {
-        double length = 0;
         for (int g = 0; g < ng; g++) {
             out->turn_mean += out->layout_turn[g] / ng;
             out->turn_rms += out->layout_turn[g] * out->layout_turn[g] / ng;
         }
         out->turn_rms = sqrt(out->turn_rms);
-        for (int g = 0; g < c->n_pairs; g++) length += hypot(out->pairs[g].step.x, out->pairs[g].step.y);
-        out->turn_exposure = fabs(out->turn_mean) * length;
     }
     if (opts->along_input) {
         across_only(c, out);
+        if (opts->align_heading) turn_exposure(c, out);
         return SASNAV_OK;
     }
     out->centroid[0] = out->centroid_in[0];
@@ -357,6 +383,7 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
             out->centroid[g].theta = sasnav_wrap_angle(out->centroid[g].theta - f * et);
         }
     }
+    if (opts->align_heading) turn_exposure(c, out);
     return SASNAV_OK;
 }
 
