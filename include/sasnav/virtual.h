@@ -138,7 +138,10 @@ typedef struct {
                                (closed: the misclosure spread evenly); the
                                yaws stay the input's. Use it with
                                align_heading, without which the steps'
-                               sway keeps the input's drift. Removes an
+                               sway keeps the input's drift; like it, it
+                               needs headings that the true track follows
+                               (a vehicle crabbing unknown to the input
+                               keeps its across-track error). Removes an
                                across-track drift down to the first
                                group's own error; an along-track drift
                                stays (measured: docs/airsas.md, section 3)
