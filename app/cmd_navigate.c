@@ -168,7 +168,7 @@ static const char *help =
     "                    the input's positions tilts the layouts, and the\n"
     "                    steps keep the tilt's sway without it (docs/airsas.md);\n"
     "                    the turns are reported, with a warning when their\n"
-    "                    mean would move the track's end by over 1 mm (what a\n"
+    "                    mean would move the track by over 1 mm (what a\n"
     "                    crab or a heading bias would do to every step)\n"
     "  --along-track input  keep the input's along-track (a DVL's, an INS's)\n"
     "                    and correct only the across-track from the echoes:\n"
@@ -424,9 +424,10 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
      * layouts is what a crab or a heading bias would also give. */
     if (vn.align_heading && vn.turn_exposure > 1e-3)
         fprintf(stderr,
-                "sasnav navigate: warning: --align-heading turned the layouts by %+.2f mrad on "
+                "sasnav navigate: warning: %s turned the layouts by %+.2f mrad on "
                 "average; if that is a crab or a heading bias rather than a drift of the input, "
                 "every step is turned by it (moving the track by up to %.1f mm)\n",
+                vn.along_input ? "--align-heading (implied by --along-track input)" : "--align-heading",
                 1e3 * vn.turn_mean, 1e3 * vn.turn_exposure);
     if (json) {
         json_t *root = json_object(), *pairs = json_array();
@@ -485,7 +486,12 @@ static int navigate_virtual(const char *input, const char *output, sasnav_virtua
                        1e3 * (d.theta - t.theta));
             printf("  %s\n", sasnav_verdict_name(vp->est.verdict));
         }
-        if (vn.closed)
+        if (vn.closed && vn.along_input)
+            printf("loop misclosure of the across-track corrections %.3f mm (x %+.3f, y %+.3f mm), "
+                   "spread over %d steps\n",
+                   1e3 * hypot(vn.misclosure.x, vn.misclosure.y), 1e3 * vn.misclosure.x,
+                   1e3 * vn.misclosure.y, vn.n_pairs);
+        else if (vn.closed)
             printf("loop misclosure %+.3f %+.3f mm, %+.3f mrad, spread over %d steps\n",
                    1e3 * vn.misclosure.x, 1e3 * vn.misclosure.y, 1e3 * vn.misclosure.theta, vn.n_pairs);
         if (vn.length_scale != 1.0)

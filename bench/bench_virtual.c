@@ -519,8 +519,8 @@ int main(int argc, char **argv)
             free(buf);
         }
         if (vn.closed)
-            printf("#   misclosure of the chained steps: %+.3f %+.3f mm, %+.3f mrad (spread over %d steps)\n",
-                   1e3 * vn.misclosure.x, 1e3 * vn.misclosure.y, 1e3 * vn.misclosure.theta, np);
+            printf("#   misclosure of the %s: %+.3f %+.3f mm, %+.3f mrad (spread over %d steps)\n",
+                   vn.along_input ? "across-track corrections (world x, y)" : "chained steps", 1e3 * vn.misclosure.x, 1e3 * vn.misclosure.y, 1e3 * vn.misclosure.theta, np);
         fflush(stdout);
         if (write_prefix) {
             /* PREFIX-input.h5 and PREFIX-estimated.h5 (sasnav image --nav). */

@@ -392,50 +392,91 @@ static void test_align_crab(void)
 }
 
 /* along_input on a closed loop (the full circle, 360 pings, disjoint
- * groups of 2, one pass, coarse settings): the across-track corrections
- * c_g chained from the steps as virtual.h defines them (c_0 = 0, c_h =
- * (sway step - nominal sway + c_g) / cos(yaw_h - yaw_g)), their end value
- * c_n (which should be 0 again) spread evenly: group g moves by c_g - (g /
- * n) c_n along its normal; the misclosure is c_n n_0 (the coarse steps'
- * sway errors leave c_n = -10 mm, so the spread is exercised). */
+ * groups of 2, one pass, coarse settings), the input's headings 0.05 rad
+ * off its track (a crab, so that the aligned layouts turn by 0.05 rad):
+ * - each group moves along its normal only and keeps its yaw; group 0
+ *   not at all;
+ * - the spread, checked on the chained geometry: before it every step's
+ *   sway (X_h - X_g) . n_g equals the used step's; the spread moves group g
+ *   by -(g / n) c_n along n_g (c_n the across-track correction's end
+ *   value, the misclosure c_n n_0), so after it each step's sway is the
+ *   used step's minus (c_n / n) (h' cos(yaw_h - yaw_g) - g), h' = g + 1
+ *   (n for the step back to group 0);
+ * - the exposure of the 0.05 rad turn: the step lengths chained, L_g,
+ *   less the spread's (g / n) L, at most, times the turn; a small part of
+ *   |turn| L (the old definition) since the steps are nearly equal.
+ * (The coarse steps' sway errors and the crab leave c_n = +29 mm: the
+ * spread is exercised; the exposure is 2.7 mm against |turn| L = 256
+ * mm.) */
 static void test_along_closed(void)
 {
     sasnav_run *run = circle_run(360);
     if (!run) return;
+    for (int i = 0; i < run->n_pings; i++) move_ping(run, i, (sasnav_pose){0.0, 0.0, 0.05});
     sasnav_virtual_opts vc;
     circle_opts(&vc, 2);
     vc.closed = 1;
     vc.along_input = 1;
+    vc.align_heading = 1;
     vc.pair.k = vc.pair.coarse_k = 2;
     vc.pair.i = vc.pair.coarse_i = 1;
     sasnav_virtual_navigation vs;
     CHECK_OK(sasnav_navigate_virtual(run, &vc, &vs));
-    double *cg = vs.centroid ? malloc(sizeof *cg * (size_t)(vs.n_groups + 1)) : NULL;
-    if (cg) {
+    if (vs.centroid && vs.n_pairs == vs.n_groups) {
         int ng = vs.n_groups;
-        double worst = 0;
-        cg[0] = 0.0;
-        for (int g = 0; g < ng; g++) {
-            const sasnav_virtual_pair *vp = &vs.pairs[g];
-            double turn = vs.centroid_in[(g + 1) % ng].theta - vs.centroid_in[g].theta;
-            cg[g + 1] = (vp->step.y - vp->nominal.y + cg[g]) / cos(turn);
-        }
+        sasnav_pose z = vs.centroid_in[0];
+        double cn = -sin(z.theta) * vs.misclosure.x + cos(z.theta) * vs.misclosure.y;
+        double normal = 0, geometry = 0, total = 0, chained = 0, left = 0;
         for (int g = 0; g < ng; g++) {
             sasnav_pose in = vs.centroid_in[g], e = vs.centroid[g];
-            double c = cg[g] - (double)g / ng * cg[ng];
-            worst = fmax(worst, fabs(e.x - (in.x - sin(in.theta) * c)) + fabs(e.y - (in.y + cos(in.theta) * c)) +
-                                    fabs(e.theta - in.theta));
+            normal = fmax(normal, fabs(cos(in.theta) * (e.x - in.x) + sin(in.theta) * (e.y - in.y)) +
+                                      fabs(e.theta - in.theta));
+            total += hypot(vs.pairs[g].step.x, vs.pairs[g].step.y);
         }
-        sasnav_pose z = vs.centroid_in[0];
-        double mis = fabs(vs.misclosure.x + sin(z.theta) * cg[ng]) + fabs(vs.misclosure.y - cos(z.theta) * cg[ng]) +
-                     fabs(vs.misclosure.theta);
-        printf("  along input, closed loop: misclosure %.3f mm across, spread over %d groups\n", 1e3 * cg[ng], ng);
-        CHECK(worst < 1e-12 && mis < 1e-12 && fabs(cg[ng]) > 1e-5,
-              "along_input closed: centroids off the definition by %g, misclosure by %g (c_n %g)", worst, mis,
-              cg[ng]);
-        free(cg);
+        normal += hypot(vs.centroid[0].x - z.x, vs.centroid[0].y - z.y);
+        for (int g = 0; g < ng; g++) {
+            int h = (g + 1) % ng, hp = g + 1;
+            sasnav_pose a = vs.centroid[g], b = vs.centroid[h];
+            double sway = -sin(a.theta) * (b.x - a.x) + cos(a.theta) * (b.y - a.y);
+            double want = vs.pairs[g].step.y -
+                          cn / ng * (hp * cos(vs.centroid_in[h].theta - a.theta) - g);
+            geometry = fmax(geometry, fabs(sway - want));
+            left = fmax(left, fabs(chained - (double)g / ng * total));
+            chained += hypot(vs.pairs[g].step.x, vs.pairs[g].step.y);
+        }
+        printf("  along input, closed loop: misclosure %.3f mm across, spread over %d groups; turn %.4f "
+               "rad, exposure %.3f mm (|turn| x length %.1f mm)\n",
+               1e3 * cn, ng, vs.turn_mean, 1e3 * vs.turn_exposure, 1e3 * fabs(vs.turn_mean) * total);
+        CHECK(normal < 1e-12 && fabs(vs.misclosure.theta) == 0,
+              "along_input closed: moved along track or turned by %g", normal);
+        CHECK(geometry < 1e-12 && fabs(cn) > 1e-5, "along_input closed: steps' sway off by %g (c_n %g)",
+              geometry, cn);
+        CHECK(fabs(vs.turn_mean - 0.05) < 1e-3 &&
+                  fabs(vs.turn_exposure - fabs(vs.turn_mean) * left) < 1e-12 &&
+                  vs.turn_exposure < 0.1 * fabs(vs.turn_mean) * total,
+              "along_input closed: turn %g, exposure %g m (expected %g; |turn| x length %g m)",
+              vs.turn_mean, vs.turn_exposure, fabs(vs.turn_mean) * left, fabs(vs.turn_mean) * total);
     }
     sasnav_virtual_navigation_free(&vs);
+    sasnav_run_free(run);
+}
+
+/* along_input refuses consecutive groups whose input yaws differ by more
+ * than 60 degrees (the step's sway would be read across a normal turned
+ * by as much, divided by its cosine): 8 pings, groups of 2, the second
+ * half's headings turned by 1.2 rad; refused before any estimate. */
+static void test_along_turn(void)
+{
+    sasnav_run *run = circle_run(8);
+    if (!run) return;
+    for (int i = 4; i < 8; i++) move_ping(run, i, (sasnav_pose){0.0, 0.0, 1.2});
+    sasnav_virtual_opts vo;
+    circle_opts(&vo, 2);
+    vo.along_input = 1;
+    sasnav_virtual_navigation vn;
+    int rc = sasnav_navigate_virtual(run, &vo, &vn);
+    CHECK(rc == SASNAV_ERR_ARG && strstr(sasnav_last_error(), "turn by"), "turned groups: %d, %s", rc,
+          sasnav_last_error());
     sasnav_run_free(run);
 }
 
@@ -496,8 +537,15 @@ static void test_along_input(void)
         CHECK(vp->used, "pair %d: %s", j, sasnav_verdict_name(vp->est.verdict));
     }
     CHECK(along_moved < 1e-12, "along-track or yaw moved by %g", along_moved);
+    /* The exposure of an open chain: every step's sway grows by the mean
+     * turn times its length, so c at the last group by it times the
+     * track's length. */
+    double length = 0;
+    for (int j = 0; j < vn.n_pairs; j++) length += hypot(vn.pairs[j].step.x, vn.pairs[j].step.y);
+    CHECK(fabs(vn.turn_exposure - fabs(vn.turn_mean) * length) < 1e-15 && vn.turn_mean != 0,
+          "exposure %g m, turn %g rad, length %g m", vn.turn_exposure, vn.turn_mean, length);
     CHECK(def < 1e-12, "the chained sway differs from the steps' by %g m", def);
-    CHECK(spread_in > 0.8e-3 && spread_out < 0.1e-3,
+    CHECK(spread_in > 0.7e-3 && spread_out < 0.1e-3,
           "across-track error round the first group's: input %.3f mm, estimate %.3f mm", 1e3 * spread_in,
           1e3 * spread_out);
     vo.along_input = 0;
@@ -525,5 +573,6 @@ int main(void)
     test_align_crab();
     test_along_input();
     test_along_closed();
+    test_along_turn();
     return test_summary("test_virtual");
 }

@@ -141,7 +141,13 @@ typedef struct {
                                sway keeps the input's drift; like it, it
                                needs headings that the true track follows
                                (a vehicle crabbing unknown to the input
-                               keeps its across-track error). Removes an
+                               keeps its across-track error). With
+                               keep_length the sway steps are scaled too
+                               (the estimator's length bias; every
+                               measurement used it). Consecutive groups
+                               whose input yaws differ by more than 60
+                               degrees are refused (the step's sway is read
+                               across the next normal, 1 / cos). Removes an
                                across-track drift down to the first
                                group's own error; an along-track drift
                                stays (measured: docs/airsas.md, section 3)

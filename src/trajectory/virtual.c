@@ -276,6 +276,18 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
     for (int g = 0; g < ng && !rc; g++)
         rc = group_layout(c, nav, g * c->stride, c->o->align_heading, gather,
                           c->layout_in + (size_t)g * c->nv, &out->centroid_in[g], &out->layout_turn[g]);
+    /* along_input reads each step's sway across the next group's normal,
+     * 1 / cos of the turn between them: refused past 60 degrees. */
+    for (int g = 0; g < c->n_pairs && !rc && opts->along_input; g++) {
+        int h = (g + 1) % ng;
+        double turn = sasnav_wrap_angle(out->centroid_in[h].theta - out->centroid_in[g].theta);
+        if (!(cos(turn) >= 0.5))
+            rc = sasnav_set_error(SASNAV_ERR_ARG,
+                                  "virtual arrays: along-track from the input: the groups at pings %d "
+                                  "and %d turn by %.1f degrees (at most 60: fewer pings between "
+                                  "groups)",
+                                  g * c->stride, h * c->stride, fabs(turn) * 180.0 / M_PI);
+    }
     for (int g = 0; g < c->n_pairs && !rc; g++) {
         sasnav_virtual_pair *vp = &out->pairs[g];
         int h = (g + 1) % ng;
