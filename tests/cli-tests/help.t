@@ -404,7 +404,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       the input's positions tilts the layouts, and the
                       steps keep the tilt's sway without it (docs/airsas.md);
                       the turns are reported, with a warning when their
-                      mean would move the track's end by over 1 mm (what a
+                      mean would move the track by over 1 mm (what a
                       crab or a heading bias would do to every step)
     --along-track input  keep the input's along-track (a DVL's, an INS's)
                       and correct only the across-track from the echoes:

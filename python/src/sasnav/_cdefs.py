@@ -485,7 +485,6 @@ class NavigationC(Structure):  # navigate.h: struct sasnav_navigation
     ]
 
 
-# Every mirrored struct (checked by tests/test_layout.py).
 class VirtualOpts(Structure):  # virtual.h
     _c_name_ = "sasnav_virtual_opts"
     _fields_ = [
@@ -543,6 +542,7 @@ class VirtualNavigationC(Structure):  # virtual.h: sasnav_virtual_navigation
     ]
 
 
+# Every mirrored struct (checked by tests/test_layout.py).
 STRUCTS = [
     Pose, PingPose, ChannelSizeC, SensorArrayC, SystemC, Window, AidingC, PingSourceC, RunC, GridC, OpOpts, FfbpOpts,
     CglsOpts, SceneC, RippleParams, TrajectoryParams, AidingParams, ScenarioC,

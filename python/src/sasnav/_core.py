@@ -25,7 +25,8 @@ __all__ = [
     "Grid", "Image", "NavData", "Scenario", "Candidate", "PairEstimate", "NavigatedPair",
     "Navigation", "library_version", "read_run", "write_run", "read_nav", "write_nav",
     "read_image", "write_image", "scenario", "simulate", "estimate_pair", "navigate",
-    "image", "ping_poses", "centroids", "default_grid",
+    "image", "ping_poses", "centroids", "default_grid", "VirtualPair", "VirtualNavigation",
+    "navigate_virtual",
 ]
 
 # ---------------------------------------------------------------------------
@@ -1424,6 +1425,10 @@ def navigate_virtual(run, k=4, *, interleave=1, stride=0, closed=False, iteratio
     if along_track not in ("echoes", "input"):
         raise ValueError(f"along_track is 'echoes' or 'input' (got {along_track!r})")
     along = along_track == "input"
+    if "fix_yaw" in opts or "fix_yaw" in (pair or {}):
+        raise ValueError("navigate_virtual: the yaw is held unless estimate_yaw=True (no fix_yaw)")
+    if isinstance(k, bool) or not isinstance(k, int) or k < 2:
+        raise ValueError(f"navigate_virtual: k needs 2 or more pings (got {k!r})")
     if along and estimate_yaw:
         raise ValueError("along_track='input' keeps the input's yaws: it excludes estimate_yaw")
     L = lib()
