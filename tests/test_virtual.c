@@ -494,8 +494,9 @@ static void test_along_turn(void)
  *   within 0.08 mm, the steps' sway errors chained; with an along-track
  *   ramp of 0.1 mm a ping added to the input 0.15 mm: an along-track
  *   error leaks into the sway steps, docs/airsas.md);
- * - without the option (the layouts aligned all the same) the along-track
- *   positions move: the chain takes both axes from the echoes. */
+ * - the exposure of the layouts' mean turn (virtual.h).
+ * (Without the option the chained centroids move along track by 0.1 mm
+ * or more: the chain takes both axes from the echoes.) */
 static void test_along_input(void)
 {
     sasnav_run *run = circle_run(12);
@@ -508,8 +509,7 @@ static void test_along_input(void)
     vo.interleave = 2;
     vo.align_heading = 1;
     vo.along_input = 1;
-    sasnav_virtual_navigation vn, ve;
-    memset(&ve, 0, sizeof ve);
+    sasnav_virtual_navigation vn;
     CHECK_OK(sasnav_navigate_virtual(run, &vo, &vn));
     CHECK(vn.along_input == 1 && vn.n_groups == 8 && vn.n_pairs == 7, "groups %d, pairs %d", vn.n_groups,
           vn.n_pairs);
@@ -548,16 +548,6 @@ static void test_along_input(void)
     CHECK(spread_in > 0.7e-3 && spread_out < 0.1e-3,
           "across-track error round the first group's: input %.3f mm, estimate %.3f mm", 1e3 * spread_in,
           1e3 * spread_out);
-    vo.along_input = 0;
-    CHECK_OK(sasnav_navigate_virtual(run, &vo, &ve));
-    double along_echoes = 0;
-    for (int g = 0; g < ve.n_groups && ve.centroid; g++) {
-        sasnav_pose in = ve.centroid_in[g], e = ve.centroid[g];
-        along_echoes = fmax(along_echoes, fabs(cos(in.theta) * (e.x - in.x) + sin(in.theta) * (e.y - in.y)));
-    }
-    CHECK(ve.along_input == 0 && along_echoes > 0.1e-3, "both axes from the echoes: along moved %.3f mm",
-          1e3 * along_echoes);
-    sasnav_virtual_navigation_free(&ve);
     sasnav_virtual_navigation_free(&vn);
     sasnav_run_free(run);
 }
