@@ -211,8 +211,8 @@ static void across_only(const vctx *c, sasnav_virtual_navigation *out)
     for (int g = 0; g < c->n_pairs; g++) {
         int h = (g + 1) % ng;
         const sasnav_virtual_pair *vp = &out->pairs[g];
-        double turn = cos(sasnav_wrap_angle(out->centroid_in[h].theta - out->centroid_in[g].theta));
-        double ch = (vp->step.y - vp->nominal.y + cg) / turn;
+        double cos_turn = cos(sasnav_wrap_angle(out->centroid_in[h].theta - out->centroid_in[g].theta));
+        double ch = (vp->step.y - vp->nominal.y + cg) / cos_turn;
         sasnav_pose n = out->centroid_in[g];
         out->centroid[g] = (sasnav_pose){n.x - sin(n.theta) * cg, n.y + cos(n.theta) * cg, n.theta};
         if (h == 0) end = ch;
