@@ -270,3 +270,33 @@ def test_navigate_virtual(tmp_path, run_cli):
         sasnav.navigate_virtual(run, 4, along_track="input", fix_yaw=0)
     with pytest.raises(ValueError, match="2 or more"):
         sasnav.navigate_virtual(run, 1)
+
+
+def test_airsas_drift_helpers(source_dir):
+    """examples/airsas_drift.py's error measure (the example itself needs
+    the AirSAS recording and 8 minutes): on a 0.85 m circle of 360 poses,
+    a rigid move of the whole path costs nothing; a change of radius by
+    c (every pose moved c across its track) is no rigid move and comes out
+    as c across, 0 along; compose() moves each pose in its own frame."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("airsas_drift", source_dir / "examples" / "airsas_drift.py")
+    ex = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(ex)
+    phi = np.arange(360) * np.pi / 180
+    truth = np.zeros(360, sasnav.PING_POSE_DTYPE)
+    for part in ("tx", "array"):
+        truth[part]["x"], truth[part]["y"] = 0.85 * np.cos(phi), 0.85 * np.sin(phi)
+        truth[part]["theta"] = phi + np.pi / 2
+    moved = truth.copy()
+    c, s = np.cos(0.3), np.sin(0.3)
+    for part in ("tx", "array"):
+        moved[part]["x"] = c * truth[part]["x"] - s * truth[part]["y"] + 0.2
+        moved[part]["y"] = s * truth[part]["x"] + c * truth[part]["y"] - 0.1
+        moved[part]["theta"] = truth[part]["theta"] + 0.3
+    assert ex.rigid_errors(moved, truth) == pytest.approx((0, 0), abs=1e-9)
+    radius = truth.copy()
+    d = np.zeros((360, 2))
+    d[:, 1] = 0.002  # 2 mm to the left of the track: towards the centre
+    radius["array"] = ex.compose(truth["array"], d)
+    assert np.allclose(np.hypot(radius["array"]["x"], radius["array"]["y"]), 0.848, atol=1e-12)
+    assert ex.rigid_errors(radius, truth) == pytest.approx((0, 2), abs=1e-6)
