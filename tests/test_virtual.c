@@ -405,9 +405,9 @@ static void test_align_crab(void)
  * - the exposure of the 0.05 rad turn: the step lengths chained, L_g,
  *   less the spread's (g / n) L, at most, times the turn; a small part of
  *   |turn| L (the old definition) since the steps are nearly equal.
- * (The coarse steps' sway errors and the crab leave c_n = +29 mm: the
- * spread is exercised; the exposure is 2.7 mm against |turn| L = 256
- * mm.) */
+ * (The coarse steps' sway errors and the crab leave c_n = +7.6 mm: the
+ * spread is exercised; the exposure is 0.7 mm against |turn| L = 265
+ * mm. A 0.2 m grid: half the cost of 0.3 m.) */
 static void test_along_closed(void)
 {
     sasnav_run *run = circle_run(360);
@@ -420,6 +420,7 @@ static void test_along_closed(void)
     vc.align_heading = 1;
     vc.pair.k = vc.pair.coarse_k = 2;
     vc.pair.i = vc.pair.coarse_i = 1;
+    vc.pair.range_extent = vc.pair.cross_extent = 0.2;
     sasnav_virtual_navigation vs;
     CHECK_OK(sasnav_navigate_virtual(run, &vc, &vs));
     if (vs.centroid && vs.n_pairs == vs.n_groups) {
