@@ -204,33 +204,30 @@ static int group_layout(const vctx *c, const sasnav_ping_pose *nav, int first, i
  * used step's sway chains c from c_0 = 0. Closed: c should come back to 0
  * after the last step; its end value is spread evenly over the groups, as
  * the pose chain spreads its misclosure. The yaws stay the input's. */
+
+/* p moved by c along its normal (its yaw + 90 degrees). */
+static sasnav_pose moved_across(sasnav_pose p, double c)
+{
+    return (sasnav_pose){p.x - sin(p.theta) * c, p.y + cos(p.theta) * c, p.theta};
+}
+
 static void across_only(const vctx *c, sasnav_virtual_navigation *out)
 {
     int ng = c->n_groups;
     double cg = 0.0, end = 0.0;
+    out->centroid[0] = out->centroid_in[0];
     for (int g = 0; g < c->n_pairs; g++) {
         int h = (g + 1) % ng;
         const sasnav_virtual_pair *vp = &out->pairs[g];
         double cos_turn = cos(sasnav_wrap_angle(out->centroid_in[h].theta - out->centroid_in[g].theta));
-        double ch = (vp->step.y - vp->nominal.y + cg) / cos_turn;
-        sasnav_pose n = out->centroid_in[g];
-        out->centroid[g] = (sasnav_pose){n.x - sin(n.theta) * cg, n.y + cos(n.theta) * cg, n.theta};
-        if (h == 0) end = ch;
-        else if (g + 1 == c->n_pairs) {
-            sasnav_pose m = out->centroid_in[h]; /* the open chain's last group */
-            out->centroid[h] = (sasnav_pose){m.x - sin(m.theta) * ch, m.y + cos(m.theta) * ch, m.theta};
-        }
-        cg = ch;
+        cg = (vp->step.y - vp->nominal.y + cg) / cos_turn;
+        if (h == 0) end = cg; /* the closed loop's way back to group 0 */
+        else out->centroid[h] = moved_across(out->centroid_in[h], cg);
     }
     if (c->closed) {
-        sasnav_pose z = out->centroid_in[0];
-        out->misclosure = (sasnav_pose){-sin(z.theta) * end, cos(z.theta) * end, 0.0};
-        for (int g = 1; g < ng; g++) {
-            double f = (double)g / ng * end;
-            sasnav_pose m = out->centroid_in[g];
-            out->centroid[g].x += sin(m.theta) * f;
-            out->centroid[g].y -= cos(m.theta) * f;
-        }
+        out->misclosure = moved_across((sasnav_pose){0.0, 0.0, out->centroid_in[0].theta}, end);
+        out->misclosure.theta = 0.0;
+        for (int g = 1; g < ng; g++) out->centroid[g] = moved_across(out->centroid[g], -(double)g / ng * end);
     }
 }
 
@@ -276,21 +273,20 @@ static int one_pass(vctx *c, const sasnav_ping_pose *nav, sasnav_virtual_navigat
     for (int g = 0; g < ng && !rc; g++)
         rc = group_layout(c, nav, g * c->stride, c->o->align_heading, gather,
                           c->layout_in + (size_t)g * c->nv, &out->centroid_in[g], &out->layout_turn[g]);
-    /* along_input reads each step's sway across the next group's normal,
-     * 1 / cos of the turn between them: refused past 60 degrees. */
-    for (int g = 0; g < c->n_pairs && !rc && opts->along_input; g++) {
+    for (int g = 0; g < c->n_pairs && !rc; g++) {
+        sasnav_virtual_pair *vp = &out->pairs[g];
         int h = (g + 1) % ng;
+        /* along_input reads each step's sway across the next group's
+         * normal, 1 / cos of the turn between them: refused past 60 degrees */
         double turn = sasnav_wrap_angle(out->centroid_in[h].theta - out->centroid_in[g].theta);
-        if (!(cos(turn) >= 0.5))
+        if (opts->along_input && !(cos(turn) >= 0.5)) {
             rc = sasnav_set_error(SASNAV_ERR_ARG,
                                   "virtual arrays: along-track from the input: the groups at pings %d "
                                   "and %d turn by %.1f degrees (at most 60: fewer pings between "
                                   "groups)",
                                   g * c->stride, h * c->stride, fabs(turn) * 180.0 / M_PI);
-    }
-    for (int g = 0; g < c->n_pairs && !rc; g++) {
-        sasnav_virtual_pair *vp = &out->pairs[g];
-        int h = (g + 1) % ng;
+            break;
+        }
         memset(vp, 0, sizeof *vp);
         vp->first_p = g * c->stride;
         vp->first_q = h * c->stride;
