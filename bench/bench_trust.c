@@ -18,6 +18,8 @@
  *                    [--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows]
  *                    [--fused-lags] [--sub-lags] [--methods M1,M2,...]
  *                    [--k K] [--i I] [--gpu] [--final auto|eta|joint] [--joint-eta-ratio R]
+ *                    [--gyro-arw R] [--gyro-bias R] [--dvl-noise M] [--dvl-bias M]
+ *                    [--dvl-scale S] [--no-gyro] [--no-dvl]
  *
  * Seeds follow `sasnav simulate --seed S --aiding` (scene 3S+1, trajectory
  * 3S+2, noise 3S+3, aiding 3S+4). Prints one line per run and method, then
@@ -40,6 +42,11 @@
  * dead reckoning, half the time of all rows). --k, --i set the subspace
  * estimator's final-stage iterations (default the estimator's 8, 8);
  * --final its final-stage criterion (default the estimator's, auto).
+ * --gyro-arw (rad/sqrt(s)), --gyro-bias (rad/s), --dvl-noise, --dvl-bias
+ * (m/s), --dvl-scale (relative), --no-gyro and --no-dvl set the simulated
+ * aiding sensors (`aiding:` of docs/config.md; default its navigation-grade
+ * gyro and 600 kHz DVL): the same error draws scaled, so grades compare on
+ * common random numbers (docs/navigation.md, "Which aiding is enough").
  * --gpu runs the subspace rows' error evaluations on a CUDA GPU (builds with
  * -DSASNAV_CUDA=ON; docs/estimator.md, "GPU": the CPU's estimates to float
  * rounding, not to the bit). */
@@ -71,6 +78,8 @@ int main(int argc, char **argv)
     int use[N_METHODS] = {1, 1, 1, 1, 1, 1, 0, 0}; /* the methods run */
     double aiding_bias = 4e-4;
     const char *pairs_path = NULL;
+    sasnav_aiding_params aid;
+    sasnav_aiding_default(&aid);
     for (int a = 1; a < argc; a++) {
         if (bench_seed_option(argc, argv, &a, &s0, &ns, &snr)) continue;
         if (!strcmp(argv[a], "--threads") && a + 1 < argc) {
@@ -113,11 +122,26 @@ int main(int argc, char **argv)
             if (final_c < 0) return 2;
         } else if (!strcmp(argv[a], "--joint-eta-ratio") && a + 1 < argc) {
             eta_ratio = atof(argv[++a]);
+        } else if (!strcmp(argv[a], "--gyro-arw") && a + 1 < argc) {
+            aid.gyro_arw = atof(argv[++a]);
+        } else if (!strcmp(argv[a], "--gyro-bias") && a + 1 < argc) {
+            aid.gyro_bias = atof(argv[++a]);
+        } else if (!strcmp(argv[a], "--dvl-noise") && a + 1 < argc) {
+            aid.dvl_noise = atof(argv[++a]);
+        } else if (!strcmp(argv[a], "--dvl-bias") && a + 1 < argc) {
+            aid.dvl_bias = atof(argv[++a]);
+        } else if (!strcmp(argv[a], "--dvl-scale") && a + 1 < argc) {
+            aid.dvl_scale = atof(argv[++a]);
+        } else if (!strcmp(argv[a], "--no-gyro")) {
+            aid.gyro = 0;
+        } else if (!strcmp(argv[a], "--no-dvl")) {
+            aid.dvl = 0;
         } else {
             fprintf(stderr, "usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE] "
                             "[--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows] [--fused-lags] [--sub-lags] "
                             "[--methods M1,M2,...] [--k K] [--i I] [--gpu] [--final auto|eta|joint] "
-                            "[--joint-eta-ratio R]\n");
+                            "[--joint-eta-ratio R] [--gyro-arw R] [--gyro-bias R] [--dvl-noise M] "
+                            "[--dvl-bias M] [--dvl-scale S] [--no-gyro] [--no-dvl]\n");
             return 2;
         }
     }
@@ -140,11 +164,15 @@ int main(int argc, char **argv)
     setvbuf(stdout, NULL, _IOLBF, 0); /* one line per run as it ends (long studies) */
     printf("paper-trajectory with aiding, SNR %g dB, seeds %ld..%ld%s\n", snr, s0, s0 + ns - 1,
            gpu ? ", subspace evaluations on the GPU" : "");
+    printf("aiding: gyro %s (arw %.3g rad/sqrt(s), bias %.3g rad/s), DVL %s (noise %.3g m/s, bias %.3g m/s, "
+           "scale %.3g)\n",
+           aid.gyro ? "on" : "off", aid.gyro_arw, aid.gyro_bias, aid.dvl ? "on" : "off", aid.dvl_noise,
+           aid.dvl_bias, aid.dvl_scale);
     printf("%6s %-10s %6s %9s %8s %14s %14s %12s %10s\n", "seed", "method", "slips", "unflagged",
            "flagged", "final sway mm", "final surge mm", "final yaw", "s/pair");
     for (long s = s0; s < s0 + ns; s++) {
         int r = (int)(s - s0);
-        sasnav_run *run = bench_trajectory_run(s, snr, 1);
+        sasnav_run *run = bench_trajectory_run_aided(s, snr, &aid, NAN, NAN, NAN);
         if (!run) return 1;
         sasnav_navigation nav[N_METHODS];
         memset(nav, 0, sizeof nav);

@@ -33,9 +33,11 @@ static inline double percentile(double *v, int n, double pc)
  * noise 3S+3, aiding 3S+4. NULL (message printed) on failure. */
 /* The same with the seabed between ranges y0 and y1 (m; the preset's
  * 9-11 m where y0 is not finite) and the recorded swath widened to hold
- * it with the preset's margins (0.2 m before, 0.6 m after). */
-static inline sasnav_run *bench_trajectory_run_scene(long s, double snr, int aiding, double y0,
-                                                     double y1, double disc_amplitude)
+ * it with the preset's margins (0.2 m before, 0.6 m after), and with the
+ * aiding sensors of `ap` (NULL: none; the _scene variant: the defaults
+ * of docs/config.md where aiding is set). */
+static inline sasnav_run *bench_trajectory_run_aided(long s, double snr, const sasnav_aiding_params *ap,
+                                                     double y0, double y1, double disc_amplitude)
 {
     sasnav_scenario sc;
     sasnav_scenario_preset("paper-trajectory", &sc);
@@ -50,7 +52,8 @@ static inline sasnav_run *bench_trajectory_run_scene(long s, double snr, int aid
     sc.ripples.seed = (uint64_t)s * 3 + 1;
     sc.traj.seed = (uint64_t)s * 3 + 2;
     sc.noise_seed = (uint64_t)s * 3 + 3;
-    if (aiding) {
+    if (ap) {
+        sc.aiding = *ap;
         sc.aiding.enabled = 1;
         sc.aiding.seed = (uint64_t)s * 3 + 4;
     }
@@ -60,6 +63,14 @@ static inline sasnav_run *bench_trajectory_run_scene(long s, double snr, int aid
         return NULL;
     }
     return run;
+}
+
+static inline sasnav_run *bench_trajectory_run_scene(long s, double snr, int aiding, double y0,
+                                                     double y1, double disc_amplitude)
+{
+    sasnav_aiding_params ap;
+    sasnav_aiding_default(&ap);
+    return bench_trajectory_run_aided(s, snr, aiding ? &ap : NULL, y0, y1, disc_amplitude);
 }
 
 static inline sasnav_run *bench_trajectory_run(long s, double snr, int aiding)
