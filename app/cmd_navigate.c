@@ -867,7 +867,9 @@ int cmd_navigate(int argc, char **argv)
         else if (flagged(np))
             fprintf(stderr, "sasnav navigate: warning: pair %d-%d is %s (%s%s%s%s%s)\n", np->p, np->q,
                     np->resolution == SASNAV_RESOLVED_BRIDGED ? "bridged" : sasnav_verdict_name(np->verdict),
-                    np->status != SASNAV_OK ? sasnav_strerror(np->status) : "estimate",
+                    np->status != SASNAV_OK                  ? sasnav_strerror(np->status)
+                    : nav.method == SASNAV_METHOD_AIDING ? "no aiding measurement over the interval"
+                                                         : "estimate",
                     np->result.coincidence ? " at a phase-centre coincidence on a compact scene" : "",
                     np->eta_outlier ? " with an eta far above the run's" : "",
                     np->resolution == SASNAV_RESOLVED_BRIDGED ? ": aiding and motion model used" : "",

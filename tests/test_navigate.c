@@ -692,6 +692,38 @@ static void test_trust_point(void)
               1e3 * f.y, f.theta);
     }
     sasnav_navigation_free(&nav);
+    /* An interval without a DVL measurement (+inf): its pair is "failed"
+     * (its step the motion model's), the others stay ok. */
+    {
+        sasnav_aiding *ad = run->aiding;
+        double keep = ad->velocity_sigma[2 * 2];
+        ad->velocity_sigma[2 * 2] = INFINITY; /* the interval that ends at ping 2: pair 1-2 */
+        CHECK_OK(sasnav_navigate(run, &o, &nav));
+        for (int j = 0; j < nav.n_pairs; j++) {
+            sasnav_navigate_pair np;
+            sasnav_navigation_pair(&nav, j, &np);
+            int want = np.q == 2 ? SASNAV_VERDICT_FAILED : SASNAV_VERDICT_OK;
+            CHECK(np.verdict == want, "aiding alone, pair %d-%d: verdict %s, expected %s", np.p, np.q,
+                  sasnav_verdict_name(np.verdict), sasnav_verdict_name(want));
+        }
+        sasnav_navigation_free(&nav);
+        ad->velocity_sigma[2 * 2] = keep;
+        /* Without a DVL (or a gyro) at all: refused. */
+        double *v = ad->velocity, *vs = ad->velocity_sigma;
+        ad->velocity = ad->velocity_sigma = NULL;
+        CHECK(sasnav_navigate(run, &o, &nav) == SASNAV_ERR_ARG &&
+                  strstr(sasnav_last_error(), "no velocity"),
+              "aiding alone without a DVL accepted (%s)", sasnav_last_error());
+        ad->velocity = v;
+        ad->velocity_sigma = vs;
+        double *y = ad->yaw_rate, *ys = ad->yaw_rate_sigma;
+        ad->yaw_rate = ad->yaw_rate_sigma = NULL;
+        CHECK(sasnav_navigate(run, &o, &nav) == SASNAV_ERR_ARG &&
+                  strstr(sasnav_last_error(), "no yaw rate"),
+              "aiding alone without a gyro accepted (%s)", sasnav_last_error());
+        ad->yaw_rate = y;
+        ad->yaw_rate_sigma = ys;
+    }
     run->aiding->velocity_sigma[3] = -1.0;
     CHECK(sasnav_navigate(run, &o, &nav) == SASNAV_ERR_ARG, "negative aiding sigma accepted");
     sasnav_aiding_free(run->aiding);

@@ -375,9 +375,16 @@ static int estimate_pair(nav_ctx *ctx, int t, int j, int p, int q, sasnav_naviga
         return SASNAV_OK;
     }
     if (ctx->opts->method == SASNAV_METHOD_AIDING) {
+        /* Dead reckoning: the step is what the aiding measured over the
+         * interval. Where the gyro or the DVL has no measurement there
+         * (+inf), or the pings are not consecutive, that component is the
+         * motion model's guess: the pair is "failed", never "ok". */
+        sasnav_pose a, sa;
+        fuse_aiding_error(run, p, q, np->nominal, 0.0, &a, &sa);
         rc = SASNAV_OK;
         np->result.status = SASNAV_OK;
-        np->result.verdict = SASNAV_VERDICT_OK;
+        np->result.verdict = isfinite(sa.x) && isfinite(sa.y) && isfinite(sa.theta) ? SASNAV_VERDICT_OK
+                                                                                     : SASNAV_VERDICT_FAILED;
         np->result.displacement = np->nominal;
         np->result.margin = INFINITY;
     } else if (ctx->opts->method == SASNAV_METHOD_DPCA) {
@@ -468,6 +475,12 @@ static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
         return sasnav_set_error(SASNAV_ERR_ARG,
                                 "navigate: navigation by aiding alone needs a run with aiding "
                                 "measurements (and aiding and resolution enabled)");
+    if (o->method == SASNAV_METHOD_AIDING && (!run->aiding->yaw_rate || !run->aiding->velocity))
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "navigate: navigation by aiding alone needs a gyro (yaw rate) and a DVL "
+                                "(velocity); this run's aiding has no %s (the subspace method uses what "
+                                "there is)",
+                                run->aiding->yaw_rate ? "velocity" : "yaw rate");
     if (!(o->aiding_bias_sigma.x >= 0) || !(o->aiding_bias_sigma.y >= 0) ||
         !(o->aiding_bias_sigma.theta >= 0) ||
         !isfinite(o->aiding_bias_sigma.x + o->aiding_bias_sigma.y + o->aiding_bias_sigma.theta))
