@@ -54,7 +54,7 @@ static const char *help =
     "and reported; the exit status stays 0.\n"
     "\n"
     "  --method M        subspace (default; subspace intersection), dpca, or\n"
-    "                    aiding (the run's gyro / DVL alone: dead reckoning)\n"
+    "                    aiding (the run's gyro and DVL alone: dead reckoning)\n"
     "  --long-baselines  also estimate pairs (p, p+2) and combine all by least\n"
     "                    squares (skipped where they share < 2 phase centres)\n"
     "  --k K, --i I      CGLS and alternating-projection iterations of the\n"

@@ -145,6 +145,10 @@ int main(int argc, char **argv)
             return 2;
         }
     }
+    if ((!aid.gyro || !aid.dvl) && use[M_AID]) {
+        use[M_AID] = 0; /* dead reckoning needs both (sasnav_navigate refuses it) */
+        fprintf(stderr, "bench_trust: without a gyro or a DVL there is no 'aiding' row\n");
+    }
     if (ns < 1 || threads < 0 || speed_lags < 0 || speed_lags > 2 || k_final < 0 || i_final < 0) return 2;
     FILE *pf = pairs_path ? fopen(pairs_path, "w") : NULL;
     if (pairs_path && !pf) {

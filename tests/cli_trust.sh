@@ -3,7 +3,8 @@
 # `simulate --aiding` writes /aiding; `navigate --json` reports per pair a
 # status, candidates, the resolution and the aiding; `navigate --method
 # aiding` dead-reckons; `--no-aiding` ignores the aiding; a run without
-# aiding refuses --method aiding (exit 1, one message, no output); bad
+# aiding, or without a DVL, refuses --method aiding (exit 1, one message,
+# no output); bad
 # --motion-sigma or --method is refused; a compact scene's flagged pairs
 # give one warning line each on stderr; the eta-outlier rule's median and
 # marks on an 8-ping run. (Exit statuses of usage errors: the
@@ -95,6 +96,17 @@ fi
 grep -q "aiding" "$T/e1" || fail "message does not mention the aiding: $(cat "$T/e1")"
 [ "$(wc -l < "$T/e1")" -eq 1 ] || fail "more than one message line: $(cat "$T/e1")"
 [ -e "$T/none.h5" ] && fail "output written for a refused navigation"
+# A gyro without a DVL: dead reckoning refused (its steps would be guesses),
+# the message naming the missing velocity; no output.
+printf 'aiding: {dvl: false}\n' | cat "$T/tiny.yaml" - > "$T/gyro.yaml"
+"$CLI" simulate --config "$T/gyro.yaml" --aiding -o "$T/gyro.h5" 2> /dev/null || fail "simulate, gyro only"
+if "$CLI" navigate "$T/gyro.h5" --method aiding -o "$T/gyro-nav.h5" > /dev/null 2> "$T/e1g"; then
+    fail "--method aiding accepted without a DVL"
+else
+    [ $? -eq 1 ] || fail "--method aiding without a DVL: exit status not 1"
+fi
+grep -q "no velocity" "$T/e1g" || fail "message does not name the missing DVL: $(cat "$T/e1g")"
+[ -e "$T/gyro-nav.h5" ] && fail "output written for dead reckoning without a DVL"
 
 # Bad options: refused with a message naming them, nothing written.
 if "$CLI" navigate "$T/run.h5" --motion-sigma 0.01,0,0.01 -o "$T/x.h5" > /dev/null 2> "$T/e2"; then

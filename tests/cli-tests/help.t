@@ -290,7 +290,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   and reported; the exit status stays 0.
   
     --method M        subspace (default; subspace intersection), dpca, or
-                      aiding (the run's gyro / DVL alone: dead reckoning)
+                      aiding (the run's gyro and DVL alone: dead reckoning)
     --long-baselines  also estimate pairs (p, p+2) and combine all by least
                       squares (skipped where they share < 2 phase centres)
     --k K, --i I      CGLS and alternating-projection iterations of the
