@@ -692,22 +692,39 @@ static void test_trust_point(void)
               1e3 * f.y, f.theta);
     }
     sasnav_navigation_free(&nav);
-    /* An interval without a DVL measurement (+inf): its pair is "failed"
-     * (its step the motion model's), the others stay ok. */
+    /* An interval without a DVL or a gyro measurement (+inf): its pair is
+     * "failed" (its step the motion model's), the others stay ok; the
+     * same when the navigation is reused (its records carry no verdict
+     * of the aiding's). */
     {
         sasnav_aiding *ad = run->aiding;
-        double keep = ad->velocity_sigma[2 * 2];
+        double keep_v = ad->velocity_sigma[2 * 2], keep_g = ad->yaw_rate_sigma[1];
         ad->velocity_sigma[2 * 2] = INFINITY; /* the interval that ends at ping 2: pair 1-2 */
-        CHECK_OK(sasnav_navigate(run, &o, &nav));
-        for (int j = 0; j < nav.n_pairs; j++) {
-            sasnav_navigate_pair np;
-            sasnav_navigation_pair(&nav, j, &np);
-            int want = np.q == 2 ? SASNAV_VERDICT_FAILED : SASNAV_VERDICT_OK;
-            CHECK(np.verdict == want, "aiding alone, pair %d-%d: verdict %s, expected %s", np.p, np.q,
-                  sasnav_verdict_name(np.verdict), sasnav_verdict_name(want));
+        ad->yaw_rate_sigma[1] = INFINITY;     /* pair 0-1 */
+        sasnav_navigation first;
+        CHECK_OK(sasnav_navigate(run, &o, &first));
+        sasnav_navigate_opts ore = o;
+        ore.reuse = &first;
+        CHECK_OK(sasnav_navigate(run, &ore, &nav));
+        for (int pass = 0; pass < 2; pass++) {
+            const sasnav_navigation *nv = pass ? &nav : &first;
+            for (int j = 0; j < nv->n_pairs; j++) {
+                sasnav_navigate_pair np;
+                sasnav_navigation_pair(nv, j, &np);
+                int want = np.q <= 2 ? SASNAV_VERDICT_FAILED : SASNAV_VERDICT_OK;
+                CHECK(np.verdict == want, "aiding alone%s, pair %d-%d: verdict %s, expected %s",
+                      pass ? " (reused)" : "", np.p, np.q, sasnav_verdict_name(np.verdict),
+                      sasnav_verdict_name(want));
+            }
         }
         sasnav_navigation_free(&nav);
-        ad->velocity_sigma[2 * 2] = keep;
+        sasnav_navigation_free(&first);
+        ad->velocity_sigma[2 * 2] = keep_v;
+        ad->yaw_rate_sigma[1] = keep_g;
+        /* Long baselines: the aiding measures consecutive steps only. */
+        sasnav_navigate_opts olb = o;
+        olb.long_baselines = 1;
+        CHECK(sasnav_navigate(run, &olb, &nav) == SASNAV_ERR_ARG, "aiding alone with long baselines accepted");
         /* Without a DVL (or a gyro) at all: refused. */
         double *v = ad->velocity, *vs = ad->velocity_sigma;
         ad->velocity = ad->velocity_sigma = NULL;

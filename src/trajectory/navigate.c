@@ -375,16 +375,9 @@ static int estimate_pair(nav_ctx *ctx, int t, int j, int p, int q, sasnav_naviga
         return SASNAV_OK;
     }
     if (ctx->opts->method == SASNAV_METHOD_AIDING) {
-        /* Dead reckoning: the step is what the aiding measured over the
-         * interval. Where the gyro or the DVL has no measurement there
-         * (+inf), or the pings are not consecutive, that component is the
-         * motion model's guess: the pair is "failed", never "ok". */
-        sasnav_pose a, sa;
-        fuse_aiding_error(run, p, q, np->nominal, 0.0, &a, &sa);
-        rc = SASNAV_OK;
+        rc = SASNAV_OK; /* (the verdict: resolve_pairs, from the aiding) */
         np->result.status = SASNAV_OK;
-        np->result.verdict = isfinite(sa.x) && isfinite(sa.y) && isfinite(sa.theta) ? SASNAV_VERDICT_OK
-                                                                                     : SASNAV_VERDICT_FAILED;
+        np->result.verdict = SASNAV_VERDICT_OK;
         np->result.displacement = np->nominal;
         np->result.margin = INFINITY;
     } else if (ctx->opts->method == SASNAV_METHOD_DPCA) {
@@ -480,7 +473,13 @@ static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
                                 "navigate: navigation by aiding alone needs a gyro (yaw rate) and a DVL "
                                 "(velocity); this run's aiding has no %s (the subspace method uses what "
                                 "there is)",
-                                run->aiding->yaw_rate ? "velocity" : "yaw rate");
+                                run->aiding->yaw_rate   ? "velocity"
+                                : run->aiding->velocity ? "yaw rate"
+                                                        : "yaw rate or velocity");
+    if (o->method == SASNAV_METHOD_AIDING && o->long_baselines)
+        return sasnav_set_error(SASNAV_ERR_ARG,
+                                "navigate: navigation by aiding alone has no long baselines (the aiding "
+                                "measures consecutive pings' steps only)");
     if (!(o->aiding_bias_sigma.x >= 0) || !(o->aiding_bias_sigma.y >= 0) ||
         !(o->aiding_bias_sigma.theta >= 0) ||
         !isfinite(o->aiding_bias_sigma.x + o->aiding_bias_sigma.y + o->aiding_bias_sigma.theta))
@@ -898,6 +897,18 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
                                         : np->status == SASNAV_ERR_NO_OVERLAP ? SASNAV_VERDICT_NO_OVERLAP
                                                                                : SASNAV_VERDICT_FAILED;
         if (np->status == SASNAV_ERR_NOT_CONVERGED) np->verdict = np->first_verdict = SASNAV_VERDICT_FAILED;
+        if (o->method == SASNAV_METHOD_AIDING) {
+            /* Dead reckoning: the step is what the aiding measured over the
+             * interval. Where the gyro or the DVL has no measurement there
+             * (+inf), that component is the motion model's guess: the pair
+             * is "failed", never "ok". (Here, not where the pair is made,
+             * so that resumed and reused records are judged alike.) */
+            sasnav_pose a, sa;
+            fuse_aiding_error(run, np->p, np->q, np->nominal, 0.0, &a, &sa);
+            np->verdict = np->first_verdict = isfinite(sa.x) && isfinite(sa.y) && isfinite(sa.theta)
+                                                  ? SASNAV_VERDICT_OK
+                                                  : SASNAV_VERDICT_FAILED;
+        }
         np->fused = np->result.error;
         np->aiding = (sasnav_pose){0, 0, 0};
         np->aiding_sigma = (sasnav_pose){INFINITY, INFINITY, INFINITY};
