@@ -74,9 +74,10 @@ typedef enum {
     SASNAV_METHOD_DPCA = 1,     /* DPCA baseline (Bellettini & Pinto 2002) */
     SASNAV_METHOD_AIDING = 2    /* no pair estimates: the run's aiding
                                    measurements and the motion model alone
-                                   (dead reckoning; needs a gyro and a DVL;
-                                   an interval either does not measure is
-                                   "failed", its step the motion model's) */
+                                   (dead reckoning; needs a gyro and a DVL,
+                                   no long baselines; an interval either
+                                   does not measure is "failed", its step
+                                   the motion model's) */
 } sasnav_method;
 
 /* What the progress callback is told. Called once before the first pair
