@@ -18,7 +18,7 @@
  *                    [--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows]
  *                    [--fused-lags] [--sub-lags] [--methods M1,M2,...]
  *                    [--k K] [--i I] [--gpu] [--final auto|eta|joint] [--joint-eta-ratio R]
- *                    [--gyro-arw R] [--gyro-bias R] [--dvl-noise M] [--dvl-bias M]
+ *                    [--aiding-bias-yaw R] [--gyro-arw R] [--gyro-bias R] [--dvl-noise M] [--dvl-bias M]
  *                    [--dvl-scale S] [--no-gyro] [--no-dvl]
  *
  * Seeds follow `sasnav simulate --seed S --aiding` (scene 3S+1, trajectory
@@ -42,7 +42,9 @@
  * dead reckoning, half the time of all rows). --k, --i set the subspace
  * estimator's final-stage iterations (default the estimator's 8, 8);
  * --final its final-stage criterion (default the estimator's, auto).
- * --gyro-arw (rad/sqrt(s)), --gyro-bias (rad/s), --dvl-noise, --dvl-bias
+ * --aiding-bias-yaw R adds a yaw term to those rows' aiding bias (rad per
+ * ping interval: a gyro bias estimated jointly; `navigate --aiding-bias
+ * S,W,Y`). --gyro-arw (rad/sqrt(s)), --gyro-bias (rad/s), --dvl-noise, --dvl-bias
  * (m/s), --dvl-scale (relative), --no-gyro and --no-dvl set the simulated
  * aiding sensors (`aiding:` of docs/config.md; default its navigation-grade
  * gyro and 600 kHz DVL): the same error draws scaled, so grades compare on
@@ -76,7 +78,7 @@ int main(int argc, char **argv)
     int threads = 0, speed_lags = 0, k_final = 0, i_final = 0, gpu = 0, final_c = -1;
     double eta_ratio = 0; /* > 0: opts.pair.joint_eta_ratio */
     int use[N_METHODS] = {1, 1, 1, 1, 1, 1, 0, 0}; /* the methods run */
-    double aiding_bias = 4e-4;
+    double aiding_bias = 4e-4, aiding_bias_yaw = 0;
     const char *pairs_path = NULL;
     sasnav_aiding_params aid;
     sasnav_aiding_default(&aid);
@@ -122,6 +124,9 @@ int main(int argc, char **argv)
             if (final_c < 0) return 2;
         } else if (!strcmp(argv[a], "--joint-eta-ratio") && a + 1 < argc) {
             eta_ratio = atof(argv[++a]);
+        } else if (!strcmp(argv[a], "--aiding-bias-yaw") && a + 1 < argc) {
+            aiding_bias_yaw = atof(argv[++a]);
+            if (!(aiding_bias_yaw >= 0) || !isfinite(aiding_bias_yaw)) return 2;
         } else if (!strcmp(argv[a], "--gyro-arw") && a + 1 < argc) {
             aid.gyro_arw = atof(argv[++a]);
         } else if (!strcmp(argv[a], "--gyro-bias") && a + 1 < argc) {
@@ -140,7 +145,7 @@ int main(int argc, char **argv)
             fprintf(stderr, "usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE] "
                             "[--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows] [--fused-lags] [--sub-lags] "
                             "[--methods M1,M2,...] [--k K] [--i I] [--gpu] [--final auto|eta|joint] "
-                            "[--joint-eta-ratio R] [--gyro-arw R] [--gyro-bias R] [--dvl-noise M] "
+                            "[--joint-eta-ratio R] [--aiding-bias-yaw R] [--gyro-arw R] [--gyro-bias R] [--dvl-noise M] "
                             "[--dvl-bias M] [--dvl-scale S] [--no-gyro] [--no-dvl]\n");
             return 2;
         }
@@ -204,7 +209,7 @@ int main(int argc, char **argv)
             if (m == M_FUSED_LAGS) o.speed_lags = 1;
             /* fused and aiding without the aiding-bias term (the defaults
              * before it was on); fused+bias with it (the default since). */
-            o.aiding_bias_sigma = m == M_FUSED_BIAS || m == M_FUSED_LAGS ? (sasnav_pose){aiding_bias, aiding_bias, 0}
+            o.aiding_bias_sigma = m == M_FUSED_BIAS || m == M_FUSED_LAGS ? (sasnav_pose){aiding_bias, aiding_bias, aiding_bias_yaw}
                                                     : (sasnav_pose){0, 0, 0};
             if (sasnav_navigate(run, &o, &nav[m])) {
                 fprintf(stderr, "navigate (%s, seed %ld): %s\n", names[m], s, sasnav_last_error());
