@@ -30,12 +30,12 @@ static inline double percentile(double *v, int n, double pc)
 
 /* The paper-trajectory run of seed s, as `sasnav simulate --preset
  * paper-trajectory --seed S [--aiding]`: scene 3S+1, trajectory 3S+2,
- * noise 3S+3, aiding 3S+4. NULL (message printed) on failure. */
-/* The same with the seabed between ranges y0 and y1 (m; the preset's
- * 9-11 m where y0 is not finite) and the recorded swath widened to hold
- * it with the preset's margins (0.2 m before, 0.6 m after), and with the
- * aiding sensors of `ap` (NULL: none; the _scene variant: the defaults
- * of docs/config.md where aiding is set). */
+ * noise 3S+3, aiding 3S+4; the seabed between ranges y0 and y1 (m; the
+ * preset's 9-11 m where y0 is not finite) with the recorded swath widened
+ * to hold it with the preset's margins (0.2 m before, 0.6 m after); the
+ * aiding sensors of `ap` (NULL: none). NULL (message printed) on failure.
+ * The _scene variant: the default sensors of docs/config.md where aiding
+ * is set; bench_trajectory_run: the preset's seabed too. */
 static inline sasnav_run *bench_trajectory_run_aided(long s, double snr, const sasnav_aiding_params *ap,
                                                      double y0, double y1, double disc_amplitude)
 {

@@ -197,6 +197,12 @@ static int group_layout(const vctx *c, const sasnav_ping_pose *nav, int first, i
                                centroid, turn);
 }
 
+/* p moved by c along its normal (its yaw + 90 degrees). */
+static sasnav_pose moved_across(sasnav_pose p, double c)
+{
+    return (sasnav_pose){p.x - sin(p.theta) * c, p.y + cos(p.theta) * c, p.theta};
+}
+
 /* along_input: the groups' input centroids moved along their normals
  * only. With X_g = C_g + c_g n_g (C_g the input centroid, n_g its normal),
  * the step from g to h = g + 1 read in g's frame has the sway (X_h - X_g)
@@ -204,13 +210,6 @@ static int group_layout(const vctx *c, const sasnav_ping_pose *nav, int first, i
  * used step's sway chains c from c_0 = 0. Closed: c should come back to 0
  * after the last step; its end value is spread evenly over the groups, as
  * the pose chain spreads its misclosure. The yaws stay the input's. */
-
-/* p moved by c along its normal (its yaw + 90 degrees). */
-static sasnav_pose moved_across(sasnav_pose p, double c)
-{
-    return (sasnav_pose){p.x - sin(p.theta) * c, p.y + cos(p.theta) * c, p.theta};
-}
-
 static void across_only(const vctx *c, sasnav_virtual_navigation *out)
 {
     int ng = c->n_groups;
