@@ -17,6 +17,7 @@
 /* getopt value of --equalise (no short option) */
 #define OPT_EQUALISE 1001
 #define OPT_ALONG_TRACK 1002
+#define OPT_LINK_SIGMA 1003
 
 static const char *help =
     "usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]\n"
@@ -25,7 +26,7 @@ static const char *help =
     "                       [--search-grid G] [--coincidence F] [--compact-contrast C]\n"
     "                       [--eta-outlier R] [--equalise M] [--no-aiding] [--no-resolve]\n"
     "                       [--motion-sigma S,W,Y] [--speed-lags none|dvl|pairs]\n"
-    "                       [--aiding-bias S,W,Y]\n"
+    "                       [--aiding-bias S,W,Y] [--link-sigma S,W,Y]\n"
     "                       [--threads N] [--gpu] [--json] [--checkpoint FILE]\n"
     "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
     "       sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]\n"
@@ -119,6 +120,10 @@ static const char *help =
     "  --motion-sigma S,W,Y  standard deviations of the change of the motion\n"
     "                    error from one pair to the next (m, m, rad; default\n"
     "                    0.01,0.01,0.01)\n"
+    "  --link-sigma S,W,Y  standard deviations of an ok pair's estimate in the\n"
+    "                    fusion (m, m, rad; default 0.001,0.00002,0.00005);\n"
+    "                    larger ones give the aiding more weight (below about\n"
+    "                    5 dB the pairs' surge is biased: docs/navigation.md)\n"
     "  --first-pose X,Y,YAW  place the trajectory so that the first ping's PCA\n"
     "                    centroid is at this world pose (an external fix:\n"
     "                    GNSS, USBL); default: the run's nominal first ping\n"
@@ -548,6 +553,7 @@ int cmd_navigate(int argc, char **argv)
         {"cross-extent", required_argument, 0, 'X'}, {"surge-sigma", required_argument, 0, 'U'},
         {"range-extent", required_argument, 0, 'E'}, {"no-aiding", no_argument, 0, 'N'},
         {"no-resolve", no_argument, 0, 'R'}, {"motion-sigma", required_argument, 0, 'M'},
+        {"link-sigma", required_argument, 0, OPT_LINK_SIGMA},
         {"speed-lags", required_argument, 0, 'S'}, {"aiding-bias", required_argument, 0, 'B'},
         {"tx-yaw", required_argument, 0, 'Y'},
         {"checkpoint", required_argument, 0, 'C'},
@@ -702,6 +708,14 @@ int cmd_navigate(int argc, char **argv)
             if (cli_parse_doubles(optarg, 3, ms) || !(ms[0] > 0 && ms[1] > 0 && ms[2] > 0))
                 return cli_usage("navigate", "--motion-sigma needs three standard deviations > 0");
             no.motion_sigma = (sasnav_pose){ms[0], ms[1], ms[2]};
+            break;
+        }
+        case OPT_LINK_SIGMA: {
+            double ls[3];
+            if (cli_parse_doubles(optarg, 3, ls) || !(ls[0] > 0 && ls[1] > 0 && ls[2] > 0))
+                return cli_usage("navigate", "--link-sigma needs three standard deviations > 0");
+            no.link_sigma = (sasnav_pose){ls[0], ls[1], ls[2]};
+            no.long_sigma = (sasnav_pose){2 * ls[0], 2 * ls[1], 2 * ls[2]};
             break;
         }
         case 'j': json = 1; break;

@@ -19,7 +19,7 @@
  *                    [--fused-lags] [--sub-lags] [--methods M1,M2,...]
  *                    [--k K] [--i I] [--gpu] [--final auto|eta|joint] [--joint-eta-ratio R]
  *                    [--aiding-bias-yaw R] [--gyro-arw R] [--gyro-bias R] [--dvl-noise M] [--dvl-bias M]
- *                    [--dvl-scale S] [--no-gyro] [--no-dvl]
+ *                    [--dvl-scale S] [--no-gyro] [--no-dvl] [--link-sigma S,W,Y]
  *
  * Seeds follow `sasnav simulate --seed S --aiding` (scene 3S+1, trajectory
  * 3S+2, noise 3S+3, aiding 3S+4). Prints one line per run and method, then
@@ -49,6 +49,8 @@
  * aiding sensors (`aiding:` of docs/config.md; default its navigation-grade
  * gyro and 600 kHz DVL): the same error draws scaled, so grades compare on
  * common random numbers (docs/navigation.md, "Which aiding is enough").
+ * --link-sigma S,W,Y sets every row's opts.link_sigma (an ok pair's
+ * standard deviations in the fusion; `navigate --link-sigma`).
  * --gpu runs the subspace rows' error evaluations on a CUDA GPU (builds with
  * -DSASNAV_CUDA=ON; docs/estimator.md, "GPU": the CPU's estimates to float
  * rounding, not to the bit). */
@@ -79,6 +81,7 @@ int main(int argc, char **argv)
     double eta_ratio = 0; /* > 0: opts.pair.joint_eta_ratio */
     int use[N_METHODS] = {1, 1, 1, 1, 1, 1, 0, 0}; /* the methods run */
     double aiding_bias = 4e-4, aiding_bias_yaw = 0;
+    sasnav_pose link_sigma = {0, 0, 0}; /* 0: the library's default */
     const char *pairs_path = NULL;
     sasnav_aiding_params aid;
     sasnav_aiding_default(&aid);
@@ -141,12 +144,16 @@ int main(int argc, char **argv)
             aid.gyro = 0;
         } else if (!strcmp(argv[a], "--no-dvl")) {
             aid.dvl = 0;
+        } else if (!strcmp(argv[a], "--link-sigma") && a + 1 < argc) {
+            if (sscanf(argv[++a], "%lf,%lf,%lf", &link_sigma.x, &link_sigma.y, &link_sigma.theta) != 3 ||
+                !(link_sigma.x > 0 && link_sigma.y > 0 && link_sigma.theta > 0))
+                return 2;
         } else {
             fprintf(stderr, "usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE] "
                             "[--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows] [--fused-lags] [--sub-lags] "
                             "[--methods M1,M2,...] [--k K] [--i I] [--gpu] [--final auto|eta|joint] "
                             "[--joint-eta-ratio R] [--aiding-bias-yaw R] [--gyro-arw R] [--gyro-bias R] [--dvl-noise M] "
-                            "[--dvl-bias M] [--dvl-scale S] [--no-gyro] [--no-dvl]\n");
+                            "[--dvl-bias M] [--dvl-scale S] [--no-gyro] [--no-dvl] [--link-sigma S,W,Y]\n");
             return 2;
         }
     }
@@ -196,6 +203,10 @@ int main(int argc, char **argv)
             if (final_c >= 0) o.pair.final_criterion = final_c;
             if (eta_ratio > 0) o.pair.joint_eta_ratio = eta_ratio;
             if (i_final > 0) o.pair.i = i_final;
+            if (link_sigma.x > 0) {
+                o.link_sigma = link_sigma;
+                o.long_sigma = (sasnav_pose){2 * link_sigma.x, 2 * link_sigma.y, 2 * link_sigma.theta};
+            }
             o.use_aiding = m == M_FUSED || m == M_FUSED_BIAS || m == M_AID || m == M_FUSED_LAGS;
             o.resolve = m != M_PAPER;
             if (m == M_PAPER || m == M_FUSED || m == M_FUSED_BIAS) o.reuse = &nav[M_SUB];

@@ -5,7 +5,8 @@
 # aiding` dead-reckons; `--no-aiding` ignores the aiding; a run without
 # aiding, or without a DVL, refuses --method aiding (exit 1, one message,
 # no output); bad
-# --motion-sigma or --method is refused; a compact scene's flagged pairs
+# --motion-sigma, --link-sigma or --method is refused; --link-sigma reaches
+# the fusion; a compact scene's flagged pairs
 # give one warning line each on stderr; the eta-outlier rule's median and
 # marks on an 8-ping run. (Exit statuses of usage errors: the
 # issue on the CLI's conventions.)
@@ -107,6 +108,33 @@ else
 fi
 grep -q "no velocity" "$T/e1g" || fail "message does not name the missing DVL: $(cat "$T/e1g")"
 [ -e "$T/gyro-nav.h5" ] && fail "output written for dead reckoning without a DVL"
+
+# --link-sigma reaches the fusion: pairs weighted 10 m / 10 rad leave the
+# aiding alone, so the fused motion errors are dead reckoning's (the same
+# smoother without estimates; to 1e-7: the pairs' weight is 1e-8 of the
+# aiding's); the default weights give a different, data-driven fusion
+# (the DVL's noise alone is 0.3 mm of surge per interval).
+"$CLI" navigate "$T/run.h5" --k 2 --i 1 --range-extent 0.6 --link-sigma 10,10,10 --aiding-bias 0,0,0 \
+    --json -o "$T/navw.h5" > "$T/navw.json" 2> "$T/navw.err" || { cat "$T/navw.err" >&2; fail "--link-sigma"; }
+"$CLI" navigate "$T/run.h5" --method aiding --aiding-bias 0,0,0 --json -o "$T/navd.h5" > "$T/navd.json" \
+    2> "$T/navd.err" || { cat "$T/navd.err" >&2; fail "--method aiding --aiding-bias 0,0,0"; }
+if [ -x /usr/bin/python3 ]; then
+    /usr/bin/python3 -c "
+import json, sys
+w, d, f = (json.load(open(a))['pairs'] for a in sys.argv[1:4])
+dev = lambda u, v: max(abs(a[c] - b[c]) for a, b in zip(u, v) for c in ('surge', 'sway', 'yaw'))
+assert dev(w, d) < 1e-7, ('--link-sigma 10,10,10 is not dead reckoning', dev(w, d))
+assert dev(f, d) > 1e-5, ('the default fusion equals dead reckoning', dev(f, d))
+" "$T/navw.json" "$T/navd.json" "$T/nav.json" || fail "--link-sigma: fused values"
+fi
+for bad in 0.001,0,0.00005 0.001,nan,0.00005 -1,1,1 0.001,0.00002; do
+    if "$CLI" navigate "$T/run.h5" --link-sigma "$bad" -o "$T/x.h5" > /dev/null 2> "$T/el"; then
+        fail "--link-sigma $bad accepted"
+    else
+        [ $? -eq 2 ] || fail "--link-sigma $bad: exit status not 2"
+    fi
+    grep -q "link-sigma" "$T/el" || fail "--link-sigma $bad: message does not name it"
+done
 
 # Bad options: refused with a message naming them, nothing written.
 if "$CLI" navigate "$T/run.h5" --motion-sigma 0.01,0,0.01 -o "$T/x.h5" > /dev/null 2> "$T/e2"; then

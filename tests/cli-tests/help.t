@@ -261,7 +261,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                          [--search-grid G] [--coincidence F] [--compact-contrast C]
                          [--eta-outlier R] [--equalise M] [--no-aiding] [--no-resolve]
                          [--motion-sigma S,W,Y] [--speed-lags none|dvl|pairs]
-                         [--aiding-bias S,W,Y]
+                         [--aiding-bias S,W,Y] [--link-sigma S,W,Y]
                          [--threads N] [--gpu] [--json] [--checkpoint FILE]
                          [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5
          sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]
@@ -355,6 +355,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
     --motion-sigma S,W,Y  standard deviations of the change of the motion
                       error from one pair to the next (m, m, rad; default
                       0.01,0.01,0.01)
+    --link-sigma S,W,Y  standard deviations of an ok pair's estimate in the
+                      fusion (m, m, rad; default 0.001,0.00002,0.00005);
+                      larger ones give the aiding more weight (below about
+                      5 dB the pairs' surge is biased: docs/navigation.md)
     --first-pose X,Y,YAW  place the trajectory so that the first ping's PCA
                       centroid is at this world pose (an external fix:
                       GNSS, USBL); default: the run's nominal first ping
