@@ -573,7 +573,7 @@ int cmd_navigate(int argc, char **argv)
     no.compact_pairs = 1; /* long runs: the pairs stay packed (docs/survey.md) */
     const char *output = NULL, *checkpoint = NULL;
     long threads = 0, k = no.pair.k, iters = no.pair.i;
-    int json = 0, opt, anchor_truth = 0, have_first = 0, n_general = 0, estimate_yaw = 0;
+    int json = 0, opt, anchor_truth = 0, have_first = 0, n_general = 0, estimate_yaw = 0, link_given = 0;
     long vk = 0, vstride = 0, viters = 2, vinter = 1;
     int have_cross = 0, have_range = 0, have_coinc = 0, have_cc = 0, closed = 0, keep_length = 0, align_heading = 0;
     int along_input = -1; /* --along-track: -1 not given, 0 echoes, 1 input */
@@ -581,7 +581,7 @@ int cmd_navigate(int argc, char **argv)
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         /* Options of the pair navigation alone (refused with --virtual-array). */
-        if (strchr("mLyfAFUNBSRMCgePO", opt) || opt == OPT_EQUALISE) n_general++;
+        if (strchr("mLyfAFUNBSRMCgePO", opt) || opt == OPT_EQUALISE || opt == OPT_LINK_SIGMA) n_general++;
         have_coinc |= opt == 'J';
         have_cc |= opt == 'Q';
         have_cross |= opt == 'X';
@@ -716,6 +716,7 @@ int cmd_navigate(int argc, char **argv)
                 return cli_usage("navigate", "--link-sigma needs three standard deviations > 0");
             no.link_sigma = (sasnav_pose){ls[0], ls[1], ls[2]};
             no.long_sigma = (sasnav_pose){2 * ls[0], 2 * ls[1], 2 * ls[2]};
+            link_given = 1;
             break;
         }
         case 'j': json = 1; break;
@@ -729,6 +730,8 @@ int cmd_navigate(int argc, char **argv)
     if (!output) return cli_usage("navigate", "an output file is required (-o nav.h5)");
     if (checkpoint && cli_same_file(checkpoint, output))
         return cli_usage("navigate", "--checkpoint and -o name the same file (%s)", output);
+    if (link_given && no.method == SASNAV_METHOD_AIDING)
+        return cli_usage("navigate", "--link-sigma weights pair estimates; --method aiding uses none");
     if (have_first && anchor_truth)
         return cli_usage("navigate", "--first-pose and --anchor-truth exclude each other");
     const char *input = argv[optind];

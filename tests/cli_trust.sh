@@ -135,6 +135,16 @@ for bad in 0.001,0,0.00005 0.001,nan,0.00005 -1,1,1 0.001,0.00002; do
     fi
     grep -q "link-sigma" "$T/el" || fail "--link-sigma $bad: message does not name it"
 done
+# ... and where no pair estimate is fused (dead reckoning, virtual arrays).
+for other in "--method aiding" "--virtual-array 2"; do
+    # shellcheck disable=SC2086 # two words on purpose
+    if "$CLI" navigate "$T/run.h5" $other --link-sigma 1,1,1 -o "$T/x.h5" > /dev/null 2> "$T/el"; then
+        fail "--link-sigma with $other accepted"
+    else
+        [ $? -eq 2 ] || fail "--link-sigma with $other: exit status not 2"
+    fi
+    grep -q "link-sigma\|takes only" "$T/el" || fail "--link-sigma with $other: unclear message: $(cat "$T/el")"
+done
 
 # Bad options: refused with a message naming them, nothing written.
 if "$CLI" navigate "$T/run.h5" --motion-sigma 0.01,0,0.01 -o "$T/x.h5" > /dev/null 2> "$T/e2"; then
