@@ -121,9 +121,11 @@ static const char *help =
     "                    error from one pair to the next (m, m, rad; default\n"
     "                    0.01,0.01,0.01)\n"
     "  --link-sigma S,W,Y  standard deviations of an ok pair's estimate in the\n"
-    "                    fusion (m, m, rad; default 0.001,0.00002,0.00005);\n"
-    "                    larger ones give the aiding more weight (below about\n"
-    "                    5 dB the pairs' surge is biased: docs/navigation.md)\n"
+    "                    fusion (m, m, rad; default 0.001,0.00002,0.00005;\n"
+    "                    long baselines twice these); larger ones give the\n"
+    "                    aiding (without it, the motion model) more weight\n"
+    "                    (at about 5 dB and below the pairs' surge is biased:\n"
+    "                    docs/navigation.md, \"Below 10 dB\")\n"
     "  --first-pose X,Y,YAW  place the trajectory so that the first ping's PCA\n"
     "                    centroid is at this world pose (an external fix:\n"
     "                    GNSS, USBL); default: the run's nominal first ping\n"
@@ -712,8 +714,9 @@ int cmd_navigate(int argc, char **argv)
         }
         case OPT_LINK_SIGMA: {
             double ls[3];
-            if (cli_parse_doubles(optarg, 3, ls) || !(ls[0] > 0 && ls[1] > 0 && ls[2] > 0))
-                return cli_usage("navigate", "--link-sigma needs three standard deviations > 0");
+            if (cli_parse_doubles(optarg, 3, ls) || !(ls[0] > 0 && ls[1] > 0 && ls[2] > 0) ||
+                !(ls[0] <= 1e6 && ls[1] <= 1e6 && ls[2] <= 1e6))
+                return cli_usage("navigate", "--link-sigma needs three standard deviations > 0 and <= 1e6");
             no.link_sigma = (sasnav_pose){ls[0], ls[1], ls[2]};
             no.long_sigma = (sasnav_pose){2 * ls[0], 2 * ls[1], 2 * ls[2]};
             link_given = 1;

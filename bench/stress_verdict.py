@@ -2,8 +2,11 @@
 """Stress of the pair verdict on scenarios it was not tuned on.
 
 Every seed draws its own scenario around paper-trajectory (8 pings): the
-range of interest (6-20 m; swath, seabed and disc moved with it, the
-Tx-array offset scaled as the preset's 10 cm at 10 m), the SNR (5-30 dB),
+range of interest (6-20 m; the swath, the seabed's range extent and the
+disc moved with it; the seabed keeps the preset's +-2.6 m along track, so
+beyond about 14 m its ends are inside the beams' main lobe; the Tx-array
+offset scaled as the preset's 10 cm at 10 m, a choice, simulated and
+assumed alike), the SNR (5-30 dB),
 the ping spacing (0.12-0.28 m, against a 0.4 m phase-centre array), the
 motion errors (surge and sway 3-30 mm rms, yaw 2-20 mrad rms, correlation
 0.5-3 m) and the seabed (ripple period, angle and depth, scatterer density,
@@ -13,10 +16,12 @@ the pairs, the slips (fused motion error off the truth by more than a
 quarter phase-centre spacing in surge or 2e-3 rad in yaw, as bench_trust)
 and the unflagged ones (status "ok" and not bridged): the failure this
 product must not have. One line per run, then the totals and the drawn
-scenario of every run with an unflagged slip.
+scenario of every run with an unflagged slip. Exit status 1 if any pair
+slipped unflagged or any run could not be simulated or navigated (those
+are counted, and their files kept in the work folder).
 
 usage: python3 bench/stress_verdict.py path/to/sasnav S0 N [--threads T]
-       [--workdir DIR] [--keep] [--pairs FILE.csv]
+       [--pings P] [--workdir DIR] [--keep] [--pairs FILE.csv]
 The scenario of seed S is a function of S alone (numpy's default_rng(S));
 the simulation takes --seed S as well.
 """
@@ -91,7 +96,7 @@ def main():
     a = ap.parse_args()
     work = a.workdir or tempfile.mkdtemp(prefix="stress_verdict.")
     os.makedirs(work, exist_ok=True)
-    tot = {"pairs": 0, "slips": 0, "unflagged": 0, "flagged": 0, "flagged_right": 0, "runs": 0}
+    tot = {"pairs": 0, "slips": 0, "unflagged": 0, "flagged": 0, "flagged_right": 0, "runs": 0, "errors": 0}
     bad = []
     pf = open(a.pairs, "w") if a.pairs else None
     if pf:
@@ -111,13 +116,19 @@ def main():
                               "--threads", str(a.threads), "-o", run], capture_output=True, text=True)
         if sim.returncode != 0:
             print(f"{s:>6} simulate failed: {sim.stderr.strip()}")
+            tot["errors"] += 1
             continue
         nv = subprocess.run([a.cli, "navigate", run, "--no-aiding", "--json", "--threads", str(a.threads),
                              "-o", nav], capture_output=True, text=True)
         if nv.returncode != 0:
             print(f"{s:>6} navigate failed (rc {nv.returncode}): {nv.stderr.strip()}")
+            tot["errors"] += 1
             continue
         js = json.loads(nv.stdout)
+        if any(p["error"][c] is None for p in js["pairs"] for c in ("surge", "sway", "yaw")):
+            print(f"{s:>6} navigate gave a pair without a finite error (kept in {work})")
+            tot["errors"] += 1
+            continue
         slips = unflagged = flagged = flagged_right = 0
         for p in js["pairs"]:
             e = p["error"]
@@ -150,16 +161,17 @@ def main():
         if not a.keep:
             for path in (run, nav, cfg):
                 os.remove(path)
-    print(f"\nruns {tot['runs']}, pairs {tot['pairs']}: slips {tot['slips']}, unflagged slips "
-          f"{tot['unflagged']}, flagged pairs {tot['flagged']} ({tot['flagged_right']} of them right)")
+    print(f"\nruns {tot['runs']} (failed to run: {tot['errors']}), pairs {tot['pairs']}: slips {tot['slips']}, "
+          f"unflagged slips {tot['unflagged']}, flagged pairs {tot['flagged']} ({tot['flagged_right']} of them "
+          f"right)")
     for s, p, q, e, eta, margin, sc in bad:
         print(f"UNFLAGGED SLIP seed {s} pair {p}-{q}: error surge {1e3 * e['surge']:+.2f} mm, yaw "
               f"{e['yaw']:+.2e} rad; eta {eta}, margin {margin}; scenario {json.dumps(sc)}")
     if pf:
         pf.close()
-    if not a.workdir and not a.keep:
+    if not a.workdir and not a.keep and not tot["errors"]:
         shutil.rmtree(work, ignore_errors=True)
-    return 1 if tot["unflagged"] else 0
+    return 1 if tot["unflagged"] or tot["errors"] else 0
 
 
 if __name__ == "__main__":

@@ -356,9 +356,11 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       error from one pair to the next (m, m, rad; default
                       0.01,0.01,0.01)
     --link-sigma S,W,Y  standard deviations of an ok pair's estimate in the
-                      fusion (m, m, rad; default 0.001,0.00002,0.00005);
-                      larger ones give the aiding more weight (below about
-                      5 dB the pairs' surge is biased: docs/navigation.md)
+                      fusion (m, m, rad; default 0.001,0.00002,0.00005;
+                      long baselines twice these); larger ones give the
+                      aiding (without it, the motion model) more weight
+                      (at about 5 dB and below the pairs' surge is biased:
+                      docs/navigation.md, "Below 10 dB")
     --first-pose X,Y,YAW  place the trajectory so that the first ping's PCA
                       centroid is at this world pose (an external fix:
                       GNSS, USBL); default: the run's nominal first ping
