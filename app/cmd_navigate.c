@@ -583,7 +583,7 @@ int cmd_navigate(int argc, char **argv)
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         /* Options of the pair navigation alone (refused with --virtual-array). */
-        if (strchr("mLyfAFUNBSRMCgePO", opt) || opt == OPT_EQUALISE || opt == OPT_LINK_SIGMA) n_general++;
+        if (strchr("mLyfAFUNBSRMCgePOYc", opt) || opt == OPT_EQUALISE || opt == OPT_LINK_SIGMA) n_general++;
         have_coinc |= opt == 'J';
         have_cc |= opt == 'Q';
         have_cross |= opt == 'X';

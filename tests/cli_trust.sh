@@ -148,6 +148,16 @@ for other in "--method aiding" "--virtual-array 2"; do
     grep -qE "link-sigma|takes only" "$T/el" || fail "--link-sigma with $other: unclear message: $(cat "$T/el")"
 done
 
+# Options of the pair fusion are refused with --virtual-array, not ignored.
+for other in "--tx-yaw none" "--final eta"; do
+    # shellcheck disable=SC2086 # two words on purpose
+    if "$CLI" navigate "$T/run.h5" --virtual-array 2 $other -o "$T/x.h5" > /dev/null 2> "$T/ev"; then
+        fail "--virtual-array with $other accepted"
+    else
+        [ $? -eq 2 ] || fail "--virtual-array with $other: exit status not 2"
+    fi
+done
+
 # Bad options: refused with a message naming them, nothing written.
 if "$CLI" navigate "$T/run.h5" --motion-sigma 0.01,0,0.01 -o "$T/x.h5" > /dev/null 2> "$T/e2"; then
     fail "--motion-sigma with a zero accepted"
