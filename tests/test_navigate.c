@@ -48,6 +48,7 @@ static int pose_close(sasnav_pose a, sasnav_pose b, double tol)
 /* paper-trajectory reduced to n pings facing the disc, noise-free, exact
  * EPCA geometry (true_bistatic 0) and small smooth errors. */
 static int g_aiding; /* 1: the next simulate() writes aiding measurements */
+static uint64_t g_ripple_seed; /* nonzero: the next simulate()'s speckle draw */
 
 static sasnav_run *simulate(int n, double spacing, double surge_rms, double sway_rms,
                             double yaw_rms)
@@ -62,6 +63,7 @@ static sasnav_run *simulate(int n, double spacing, double surge_rms, double sway
     sc.traj.surge_rms = surge_rms;
     sc.traj.sway_rms = sway_rms;
     sc.traj.yaw_rms = yaw_rms;
+    if (g_ripple_seed) sc.ripples.seed = g_ripple_seed;
     sc.snr_db = INFINITY;
     sasnav_run *run = NULL;
     int rc = sasnav_simulate(&sc, NULL, NULL, &run);
@@ -293,6 +295,61 @@ static void test_failed_pairs(void)
     }
     sasnav_navigation_free(&nav);
     sasnav_run_free(run);
+}
+
+/* A ping whose echoes are another seabed's (a corrupt ping) in the middle
+ * of a run without aiding: both of its pairs fail, are estimated again
+ * from the motion model's prediction (the nearest usable pairs on either
+ * side, interpolated) and stay "failed" (the new estimate may be kept if
+ * its eta is lower, still failed, or the pair bridged). A failed estimate
+ * has no weight, and with no aiding the smoother's motion model alone
+ * spans them: equal changes of the motion error from pair 0 to pair 3,
+ * i.e. their fused errors on the straight line between those two pairs'
+ * (to 1e-6 m or rad: the smoother's 1 m prior on each motion error is
+ * 1e-4 of the motion model's weight, on errors of a few millimetres; the
+ * line spans 6e-4 rad of yaw). Pairs 0 and 3 stay ok. */
+static void test_bridged_middle(void)
+{
+    sasnav_run *run = simulate(5, 0.20, 3e-3, 3e-3, 3e-3);
+    g_ripple_seed = 99;
+    sasnav_run *other = simulate(5, 0.20, 3e-3, 3e-3, 3e-3);
+    g_ripple_seed = 0;
+    if (run && other) {
+        memcpy(sasnav_run_ping(run, 2), sasnav_run_ping(other, 2), sizeof(sasnav_cfloat) * sasnav_run_ping_size(run));
+        sasnav_navigate_opts o;
+        sasnav_navigate_default_opts(&o);
+        o.pair.k = o.pair.coarse_k;
+        o.pair.i = o.pair.coarse_i;
+        o.pair.range_extent = 0.6; /* m: cost / 2.7 */
+        sasnav_navigation nav;
+        CHECK_OK(sasnav_navigate(run, &o, &nav));
+        if (nav.n_pairs == 4 && nav.pairs) {
+            const sasnav_navigate_pair *pr = nav.pairs;
+            for (int j = 0; j < 4; j++)
+                printf("corrupt ping 2: pair %d-%d %s (%s), eta %.3f, fused %+.4f mm %+.5f mm %+.2e rad\n",
+                       pr[j].p, pr[j].q, sasnav_verdict_name(pr[j].verdict),
+                       sasnav_resolution_name(pr[j].resolution), pr[j].result.eta, 1e3 * pr[j].fused.x,
+                       1e3 * pr[j].fused.y, pr[j].fused.theta);
+            CHECK(pr[0].verdict == SASNAV_VERDICT_OK && pr[3].verdict == SASNAV_VERDICT_OK,
+                  "the pairs beside the corrupt ping: %s, %s", sasnav_verdict_name(pr[0].verdict),
+                  sasnav_verdict_name(pr[3].verdict));
+            for (int j = 1; j <= 2; j++) {
+                CHECK(pr[j].verdict == SASNAV_VERDICT_FAILED && (pr[j].resolution == SASNAV_RESOLVED_BRIDGED ||
+                                                                 pr[j].resolution == SASNAV_RESOLVED_REESTIMATED),
+                      "pair %d-%d of the corrupt ping: %s, %s", pr[j].p, pr[j].q,
+                      sasnav_verdict_name(pr[j].verdict), sasnav_resolution_name(pr[j].resolution));
+                double t = j / 3.0;
+                sasnav_pose a = pr[0].fused, b = pr[3].fused, f = pr[j].fused;
+                sasnav_pose line = {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), a.theta + t * (b.theta - a.theta)};
+                CHECK(pose_close(f, line, 1e-6), "bridged pair %d-%d off the motion model's line by "
+                      "%.2e m, %.2e m, %.2e rad", pr[j].p, pr[j].q, f.x - line.x, f.y - line.y, f.theta - line.theta);
+            }
+            CHECK(nav.n_flagged >= 2, "%d flagged pairs", nav.n_flagged);
+        }
+        sasnav_navigation_free(&nav);
+    }
+    sasnav_run_free(run);
+    sasnav_run_free(other);
 }
 
 static void test_bad_input(void)
@@ -864,6 +921,7 @@ static void test_eta_outlier(void)
 int main(void)
 {
     test_eta_outlier();
+    test_bridged_middle();
     test_trust_point();
     test_threads_over_pairs();
     test_two_pass();
