@@ -18,6 +18,7 @@
 #define OPT_EQUALISE 1001
 #define OPT_ALONG_TRACK 1002
 #define OPT_LINK_SIGMA 1003
+#define OPT_LINK_ETA 1004
 
 static const char *help =
     "usage: sasnav navigate run.h5 [--method subspace|dpca|aiding] [--long-baselines]\n"
@@ -26,7 +27,7 @@ static const char *help =
     "                       [--search-grid G] [--coincidence F] [--compact-contrast C]\n"
     "                       [--eta-outlier R] [--equalise M] [--no-aiding] [--no-resolve]\n"
     "                       [--motion-sigma S,W,Y] [--speed-lags none|dvl|pairs]\n"
-    "                       [--aiding-bias S,W,Y] [--link-sigma S,W,Y]\n"
+    "                       [--aiding-bias S,W,Y] [--link-sigma S,W,Y] [--link-eta E]\n"
     "                       [--threads N] [--gpu] [--json] [--checkpoint FILE]\n"
     "                       [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5\n"
     "       sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]\n"
@@ -126,6 +127,10 @@ static const char *help =
     "                    aiding (without it, the motion model) more weight\n"
     "                    (at about 5 dB and below the pairs' surge is biased:\n"
     "                    docs/navigation.md, \"Below 10 dB\")\n"
+    "  --link-eta E      a pair whose final eta exceeds E has its standard\n"
+    "                    deviations in the fusion multiplied by (eta / E)^2:\n"
+    "                    noisy pairs (low SNR) weigh less (default 0.2; 0:\n"
+    "                    off, every ok pair weighs --link-sigma)\n"
     "  --first-pose X,Y,YAW  place the trajectory so that the first ping's PCA\n"
     "                    centroid is at this world pose (an external fix:\n"
     "                    GNSS, USBL); default: the run's nominal first ping\n"
@@ -555,7 +560,7 @@ int cmd_navigate(int argc, char **argv)
         {"cross-extent", required_argument, 0, 'X'}, {"surge-sigma", required_argument, 0, 'U'},
         {"range-extent", required_argument, 0, 'E'}, {"no-aiding", no_argument, 0, 'N'},
         {"no-resolve", no_argument, 0, 'R'}, {"motion-sigma", required_argument, 0, 'M'},
-        {"link-sigma", required_argument, 0, OPT_LINK_SIGMA},
+        {"link-sigma", required_argument, 0, OPT_LINK_SIGMA}, {"link-eta", required_argument, 0, OPT_LINK_ETA},
         {"speed-lags", required_argument, 0, 'S'}, {"aiding-bias", required_argument, 0, 'B'},
         {"tx-yaw", required_argument, 0, 'Y'},
         {"checkpoint", required_argument, 0, 'C'},
@@ -583,7 +588,9 @@ int cmd_navigate(int argc, char **argv)
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         /* Options of the pair navigation alone (refused with --virtual-array). */
-        if (strchr("mLyfAFUNBSRMCgePOYc", opt) || opt == OPT_EQUALISE || opt == OPT_LINK_SIGMA) n_general++;
+        if (strchr("mLyfAFUNBSRMCgePOYc", opt) || opt == OPT_EQUALISE || opt == OPT_LINK_SIGMA ||
+            opt == OPT_LINK_ETA)
+            n_general++;
         have_coinc |= opt == 'J';
         have_cc |= opt == 'Q';
         have_cross |= opt == 'X';
@@ -722,6 +729,14 @@ int cmd_navigate(int argc, char **argv)
             link_given = 1;
             break;
         }
+        case OPT_LINK_ETA: {
+            double e;
+            if (cli_parse_doubles(optarg, 1, &e) || !(e >= 0 && e <= 1e6))
+                return cli_usage("navigate", "--link-eta needs an eta >= 0 and <= 1e6 (0: off)");
+            no.link_eta = e;
+            link_given = 1;
+            break;
+        }
         case 'j': json = 1; break;
         case 'C': checkpoint = optarg; break;
         case 'o': output = optarg; break;
@@ -734,7 +749,8 @@ int cmd_navigate(int argc, char **argv)
     if (checkpoint && cli_same_file(checkpoint, output))
         return cli_usage("navigate", "--checkpoint and -o name the same file (%s)", output);
     if (link_given && no.method == SASNAV_METHOD_AIDING)
-        return cli_usage("navigate", "--link-sigma weights pair estimates; --method aiding uses none");
+        return cli_usage("navigate", "--link-sigma and --link-eta weight pair estimates; --method aiding "
+                                     "uses none");
     if (have_first && anchor_truth)
         return cli_usage("navigate", "--first-pose and --anchor-truth exclude each other");
     const char *input = argv[optind];

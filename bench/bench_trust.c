@@ -20,6 +20,7 @@
  *                    [--k K] [--i I] [--gpu] [--final auto|eta|joint] [--joint-eta-ratio R]
  *                    [--aiding-bias-yaw R] [--gyro-arw R] [--gyro-bias R] [--dvl-noise M] [--dvl-bias M]
  *                    [--dvl-scale S] [--no-gyro] [--no-dvl] [--link-sigma S,W,Y]
+ *                    [--link-eta E] [--alt-link-eta E1,E2,...]
  *
  * Seeds follow `sasnav simulate --seed S --aiding` (scene 3S+1, trajectory
  * 3S+2, noise 3S+3, aiding 3S+4). Prints one line per run and method, then
@@ -51,6 +52,11 @@
  * common random numbers (docs/navigation.md, "Which aiding is enough").
  * --link-sigma S,W,Y sets every row's opts.link_sigma (an ok pair's
  * standard deviations in the fusion; `navigate --link-sigma`).
+ * --link-eta E sets every row's opts.link_eta (`navigate --link-eta`; 0:
+ * off). --alt-link-eta E1,E2,... (at most 4 values) navigates the
+ * subspace and fused+lags rows again with each link_eta, reusing their
+ * estimates (rows "subspace@E", "fused+lags@E"): an A/B of the fusion's
+ * weights on the same pair estimates.
  * --gpu runs the subspace rows' error evaluations on a CUDA GPU (builds with
  * -DSASNAV_CUDA=ON; docs/estimator.md, "GPU": the CPU's estimates to float
  * rounding, not to the bit). */
@@ -65,6 +71,7 @@
 #include <string.h>
 
 enum { M_PAPER, M_SUB, M_DPCA, M_AID, M_FUSED, M_FUSED_BIAS, M_SUB_LAGS, M_FUSED_LAGS, N_METHODS };
+enum { MAX_ALT = 4, N_ROWS = N_METHODS + 2 * MAX_ALT }; /* rows: methods, then subspace@E, fused+lags@E */
 static const char *const names[N_METHODS] = {"paper", "subspace", "dpca", "aiding", "fused", "fused+bias",
                                              "sub+lags", "fused+lags"};
 
@@ -79,9 +86,13 @@ int main(int argc, char **argv)
     double snr = 30.0;
     int threads = 0, speed_lags = 0, k_final = 0, i_final = 0, gpu = 0, final_c = -1;
     double eta_ratio = 0; /* > 0: opts.pair.joint_eta_ratio */
-    int use[N_METHODS] = {1, 1, 1, 1, 1, 1, 0, 0}; /* the methods run */
+    int use[N_ROWS] = {1, 1, 1, 1, 1, 1, 0, 0}; /* the methods (and alternative rows) run */
     double aiding_bias = 4e-4, aiding_bias_yaw = 0;
     sasnav_pose link_sigma = {0, 0, 0}; /* 0: the library's default */
+    double link_eta = -1;                /* < 0: the library's default */
+    double alt_eta[MAX_ALT];
+    int n_alt = 0;
+    char row_name[N_ROWS][32];
     const char *pairs_path = NULL;
     sasnav_aiding_params aid;
     sasnav_aiding_default(&aid);
@@ -148,12 +159,23 @@ int main(int argc, char **argv)
             if (sscanf(argv[++a], "%lf,%lf,%lf", &link_sigma.x, &link_sigma.y, &link_sigma.theta) != 3 ||
                 !(link_sigma.x > 0 && link_sigma.y > 0 && link_sigma.theta > 0))
                 return 2;
+        } else if (!strcmp(argv[a], "--link-eta") && a + 1 < argc) {
+            link_eta = atof(argv[++a]);
+            if (!(link_eta >= 0)) return 2;
+        } else if (!strcmp(argv[a], "--alt-link-eta") && a + 1 < argc) {
+            for (char *tok = strtok(argv[++a], ","); tok; tok = strtok(NULL, ",")) {
+                if (n_alt == MAX_ALT) return 2;
+                alt_eta[n_alt] = atof(tok);
+                if (!(alt_eta[n_alt] >= 0)) return 2;
+                n_alt++;
+            }
         } else {
             fprintf(stderr, "usage: bench_trust [--seeds S0 N] [--snr DB] [--threads T] [--pairs FILE] "
                             "[--speed-lags 0|1|2] [--aiding-bias M] [--lag-rows] [--fused-lags] [--sub-lags] "
                             "[--methods M1,M2,...] [--k K] [--i I] [--gpu] [--final auto|eta|joint] "
                             "[--joint-eta-ratio R] [--aiding-bias-yaw R] [--gyro-arw R] [--gyro-bias R] [--dvl-noise M] "
-                            "[--dvl-bias M] [--dvl-scale S] [--no-gyro] [--no-dvl] [--link-sigma S,W,Y]\n");
+                            "[--dvl-bias M] [--dvl-scale S] [--no-gyro] [--no-dvl] [--link-sigma S,W,Y] "
+                            "[--link-eta E] [--alt-link-eta E1,E2,...]\n");
             return 2;
         }
     }
@@ -168,9 +190,18 @@ int main(int argc, char **argv)
         return 1;
     }
     const double lambda = 1500.0 / 300e3, d = 0.025, yaw_slip = 2e-3;
-    stats st[N_METHODS];
+    for (int m = 0; m < N_ROWS; m++) {
+        if (m < N_METHODS) {
+            snprintf(row_name[m], sizeof row_name[m], "%s", names[m]);
+        } else {
+            int r = m - N_METHODS, base = r % 2 ? M_FUSED_LAGS : M_SUB;
+            use[m] = r / 2 < n_alt && use[base];
+            if (use[m]) snprintf(row_name[m], sizeof row_name[m], "%s@%g", names[base], alt_eta[r / 2]);
+        }
+    }
+    stats st[N_ROWS];
     memset(st, 0, sizeof st);
-    for (int m = 0; m < N_METHODS; m++) {
+    for (int m = 0; m < N_ROWS; m++) {
         st[m].final_sway = calloc((size_t)ns, sizeof(double));
         st[m].final_surge = calloc((size_t)ns, sizeof(double));
         st[m].final_yaw = calloc((size_t)ns, sizeof(double));
@@ -190,12 +221,14 @@ int main(int argc, char **argv)
         int r = (int)(s - s0);
         sasnav_run *run = bench_trajectory_run_aided(s, snr, &aid, NAN, NAN, NAN);
         if (!run) return 1;
-        sasnav_navigation nav[N_METHODS];
+        sasnav_navigation nav[N_ROWS];
         memset(nav, 0, sizeof nav);
-        int order[N_METHODS] = {M_SUB, M_PAPER, M_FUSED, M_FUSED_BIAS, M_DPCA, M_AID, M_SUB_LAGS, M_FUSED_LAGS};
-        for (int k = 0; k < N_METHODS; k++) {
-            int m = order[k];
-            if (!use[m]) continue;
+        int order[N_ROWS] = {M_SUB, M_PAPER, M_FUSED, M_FUSED_BIAS, M_DPCA, M_AID, M_SUB_LAGS, M_FUSED_LAGS};
+        for (int k = N_METHODS; k < N_ROWS; k++) order[k] = k;
+        for (int k = 0; k < N_ROWS; k++) {
+            int row = order[k], m = row;
+            if (!use[row]) continue;
+            if (row >= N_METHODS) m = (row - N_METHODS) % 2 ? M_FUSED_LAGS : M_SUB;
             sasnav_navigate_opts o;
             sasnav_navigate_default_opts(&o);
             o.nthreads = threads;
@@ -207,6 +240,7 @@ int main(int argc, char **argv)
                 o.link_sigma = link_sigma;
                 o.long_sigma = (sasnav_pose){2 * link_sigma.x, 2 * link_sigma.y, 2 * link_sigma.theta};
             }
+            if (link_eta >= 0) o.link_eta = link_eta;
             o.use_aiding = m == M_FUSED || m == M_FUSED_BIAS || m == M_AID || m == M_FUSED_LAGS;
             o.resolve = m != M_PAPER;
             if (m == M_PAPER || m == M_FUSED || m == M_FUSED_BIAS) o.reuse = &nav[M_SUB];
@@ -222,12 +256,16 @@ int main(int argc, char **argv)
              * before it was on); fused+bias with it (the default since). */
             o.aiding_bias_sigma = m == M_FUSED_BIAS || m == M_FUSED_LAGS ? (sasnav_pose){aiding_bias, aiding_bias, aiding_bias_yaw}
                                                     : (sasnav_pose){0, 0, 0};
-            if (sasnav_navigate(run, &o, &nav[m])) {
-                fprintf(stderr, "navigate (%s, seed %ld): %s\n", names[m], s, sasnav_last_error());
+            if (row >= N_METHODS) { /* the same estimates, the alternative weights */
+                o.reuse = &nav[m];
+                o.link_eta = alt_eta[(row - N_METHODS) / 2];
+            }
+            if (sasnav_navigate(run, &o, &nav[row])) {
+                fprintf(stderr, "navigate (%s, seed %ld): %s\n", row_name[row], s, sasnav_last_error());
                 return 1;
             }
         }
-        for (int m = 0; m < N_METHODS; m++) {
+        for (int m = 0; m < N_ROWS; m++) {
             if (!use[m]) continue;
             const sasnav_navigation *nv = &nav[m];
             int slips = 0, unflagged = 0, flagged = 0;
@@ -251,7 +289,7 @@ int main(int argc, char **argv)
             st[m].flagged += flagged;
             st[m].pairs += nv->n_pairs;
             st[m].within += fabs(f.y) <= lambda / 25;
-            printf("%6ld %-10s %6d %9d %8d %+14.4f %+14.3f %+12.3e %10.2f\n", s, names[m], slips,
+            printf("%6ld %-10s %6d %9d %8d %+14.4f %+14.3f %+12.3e %10.2f\n", s, row_name[m], slips,
                    unflagged, flagged, 1e3 * f.y, 1e3 * f.x, f.theta, nv->seconds_per_pair);
         }
         if (pf && use[M_SUB]) {
@@ -272,14 +310,14 @@ int main(int argc, char **argv)
             fflush(pf);
         }
         fflush(stdout);
-        for (int m = 0; m < N_METHODS; m++) sasnav_navigation_free(&nav[m]);
+        for (int m = 0; m < N_ROWS; m++) sasnav_navigation_free(&nav[m]);
         sasnav_run_free(run);
     }
     if (pf) fclose(pf);
     printf("\n| method | slips | unflagged slips | flagged pairs | final sway mm, median / p95 | "
            "final surge mm | final yaw rad | rms sway mm | runs within lambda/25 |\n"
            "|---|---|---|---|---|---|---|---|---|\n");
-    for (int m = 0; m < N_METHODS; m++) {
+    for (int m = 0; m < N_ROWS; m++) {
         if (!use[m]) continue;
         stats *t = &st[m];
         int n = (int)ns;
@@ -289,10 +327,10 @@ int main(int argc, char **argv)
         double r50 = percentile(t->rms_sway, n, 50), r95 = percentile(t->rms_sway, n, 95);
         printf("| %s | %d of %d | %d | %d | %.3f / %.3f | %.2f / %.2f | %.2e / %.2e | %.3f / %.3f | "
                "%d of %d |\n",
-               names[m], t->slips, t->pairs, t->unflagged, t->flagged, 1e3 * sw50, 1e3 * sw95,
+               row_name[m], t->slips, t->pairs, t->unflagged, t->flagged, 1e3 * sw50, 1e3 * sw95,
                1e3 * su50, 1e3 * su95, y50, y95, 1e3 * r50, 1e3 * r95, t->within, n);
     }
-    for (int m = 0; m < N_METHODS; m++) {
+    for (int m = 0; m < N_ROWS; m++) {
         free(st[m].final_sway);
         free(st[m].final_surge);
         free(st[m].final_yaw);

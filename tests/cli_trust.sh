@@ -5,8 +5,8 @@
 # aiding` dead-reckons; `--no-aiding` ignores the aiding; a run without
 # aiding, or without a DVL, refuses --method aiding (exit 1, one message,
 # no output); bad
-# --motion-sigma, --link-sigma or --method is refused; --link-sigma reaches
-# the fusion; a compact scene's flagged pairs
+# --motion-sigma, --link-sigma, --link-eta or --method is refused;
+# --link-sigma and --link-eta reach the fusion; a compact scene's flagged pairs
 # give one warning line each on stderr; the eta-outlier rule's median and
 # marks on an 8-ping run. (Exit statuses of usage errors: the
 # issue on the CLI's conventions.)
@@ -129,6 +129,32 @@ assert dev(w, d) < 1e-7, ('--link-sigma 10,10,10 is not dead reckoning', dev(w, 
 assert dev(f, d) > 1e-5, ('the default fusion equals dead reckoning', dev(f, d))
 " "$T/navw.json" "$T/navd.json" "$T/navz.json" || fail "--link-sigma: fused values"
 fi
+# --link-eta reaches the fusion: at 1e-6 every pair's standard deviations
+# grow by (eta / 1e-6)^2 (over 1e8 at this run's etas), so the fusion is
+# dead reckoning's again; at 0 (off) and at 1e6 (above any eta) no pair is
+# scaled, so the two agree to the bit.
+for le in 1e-6 0 1e6; do
+    "$CLI" navigate "$T/run.h5" --k 2 --i 1 --range-extent 0.6 --aiding-bias 0,0,0 --link-eta "$le" \
+        --json -o "$T/nave$le.h5" > "$T/nave$le.json" 2> "$T/nave.err" || { cat "$T/nave.err" >&2; fail "--link-eta $le"; }
+done
+if [ -x /usr/bin/python3 ]; then
+    /usr/bin/python3 -c "
+import json, sys
+t, z, h, d = (json.load(open(a))['pairs'] for a in sys.argv[1:5])
+dev = lambda u, v: max(abs(a[c] - b[c]) for a, b in zip(u, v) for c in ('surge', 'sway', 'yaw'))
+assert dev(t, d) < 1e-7, ('--link-eta 1e-6 is not dead reckoning', dev(t, d))
+assert dev(z, d) > 1e-5, ('--link-eta 0 equals dead reckoning', dev(z, d))
+assert dev(z, h) == 0, ('--link-eta 0 and 1e6 differ', dev(z, h))
+" "$T/nave1e-6.json" "$T/nave0.json" "$T/nave1e6.json" "$T/navd.json" || fail "--link-eta: fused values"
+fi
+for bad in -1 nan 2e6 x 0.1,0.2; do
+    if "$CLI" navigate "$T/run.h5" --link-eta "$bad" -o "$T/x.h5" > /dev/null 2> "$T/el"; then
+        fail "--link-eta $bad accepted"
+    else
+        [ $? -eq 2 ] || fail "--link-eta $bad: exit status not 2"
+    fi
+    grep -q "link-eta" "$T/el" || fail "--link-eta $bad: message does not name it"
+done
 for bad in 0.001,0,0.00005 0.001,nan,0.00005 -1,1,1 0.001,0.00002 1e308,1,1; do
     if "$CLI" navigate "$T/run.h5" --link-sigma "$bad" -o "$T/x.h5" > /dev/null 2> "$T/el"; then
         fail "--link-sigma $bad accepted"
@@ -140,12 +166,15 @@ done
 # ... and where no pair estimate is fused (dead reckoning, virtual arrays).
 for other in "--method aiding" "--virtual-array 2"; do
     # shellcheck disable=SC2086 # two words on purpose
-    if "$CLI" navigate "$T/run.h5" $other --link-sigma 1,1,1 -o "$T/x.h5" > /dev/null 2> "$T/el"; then
-        fail "--link-sigma with $other accepted"
-    else
-        [ $? -eq 2 ] || fail "--link-sigma with $other: exit status not 2"
-    fi
-    grep -qE "link-sigma|takes only" "$T/el" || fail "--link-sigma with $other: unclear message: $(cat "$T/el")"
+    for weight in "--link-sigma 1,1,1" "--link-eta 0.3"; do
+        # shellcheck disable=SC2086 # two words on purpose
+        if "$CLI" navigate "$T/run.h5" $other $weight -o "$T/x.h5" > /dev/null 2> "$T/el"; then
+            fail "$weight with $other accepted"
+        else
+            [ $? -eq 2 ] || fail "$weight with $other: exit status not 2"
+        fi
+        grep -qE "link-|takes only" "$T/el" || fail "$weight with $other: unclear message: $(cat "$T/el")"
+    done
 done
 
 # Options of the pair fusion are refused with --virtual-array, not ignored.

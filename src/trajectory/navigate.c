@@ -24,6 +24,7 @@ void sasnav_navigate_default_opts(sasnav_navigate_opts *opts)
     sasnav_dpca_default_opts(&opts->dpca);
     opts->link_sigma = (sasnav_pose){1e-3, 2e-5, 5e-5};
     opts->long_sigma = (sasnav_pose){2e-3, 4e-5, 1e-4};
+    opts->link_eta = 0.2;
     opts->align = 1;
     opts->resolve = 1;
     opts->use_aiding = 1;
@@ -495,6 +496,8 @@ static int check_input(const sasnav_run *run, const sasnav_navigate_opts *o)
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: %d earlier pairs given without records", o->n_done);
     if (!sigma_ok(o->link_sigma) || !sigma_ok(o->long_sigma))
         return sasnav_set_error(SASNAV_ERR_ARG, "navigate: link standard deviations must be > 0");
+    if (!(o->link_eta >= 0)) /* (NaN too; +inf is off) */
+        return sasnav_set_error(SASNAV_ERR_ARG, "navigate: link_eta must be >= 0 (0 or +inf: off)");
     if (o->nthreads < 0) return sasnav_set_error(SASNAV_ERR_ARG, "navigate: nthreads < 0");
     if (o->resolve && (!sigma_ok(o->motion_sigma) || !(o->eta_weight >= 0) ||
                        !isfinite(o->eta_weight) || !(o->aiding_gate > 0)))
@@ -763,10 +766,22 @@ static int coincidence_only(const nav_ctx *ctx, int verdict, const sasnav_naviga
            np->resolution == SASNAV_RESOLVED_NONE;
 }
 
+/* An estimate's standard deviations scaled by its final eta
+ * (opts.link_eta): (eta / link_eta)^2 above link_eta, 1 below. */
+static sasnav_pose eta_scaled(const nav_ctx *ctx, sasnav_pose s, double eta)
+{
+    double e0 = ctx->opts->link_eta;
+    if (e0 > 0 && isfinite(e0) && eta > e0 && isfinite(eta)) {
+        double f = (eta / e0) * (eta / e0);
+        s = (sasnav_pose){f * s.x, f * s.y, f * s.theta};
+    }
+    return s;
+}
+
 /* Standard deviations of a pair's estimate in the smoother. */
 static sasnav_pose estimate_sigma(const nav_ctx *ctx, const sasnav_navigate_pair *np)
 {
-    sasnav_pose s = ctx->opts->link_sigma;
+    sasnav_pose s = eta_scaled(ctx, ctx->opts->link_sigma, np->result.eta);
     if (ctx->opts->method == SASNAV_METHOD_AIDING) return (sasnav_pose){INFINITY, INFINITY, INFINITY};
     if (np->resolution == SASNAV_RESOLVED_BRIDGED || !usable(np) ||
         np->verdict == SASNAV_VERDICT_FAILED || np->verdict == SASNAV_VERDICT_NO_OVERLAP)
@@ -1322,7 +1337,8 @@ static int solve_centroids(const nav_ctx *ctx, sasnav_navigation *out, sasnav_po
     for (int j = 0; j < out->n_pairs; j++) {
         sasnav_navigate_pair pair, *np = &pair;
         get_pair(ctx, j, np);
-        sasnav_pose s = np->q - np->p == 1 ? ctx->opts->link_sigma : ctx->opts->long_sigma;
+        sasnav_pose s = eta_scaled(ctx, np->q - np->p == 1 ? ctx->opts->link_sigma : ctx->opts->long_sigma,
+                                   np->result.eta);
         if (np->status != SASNAV_OK && np->status != SASNAV_ERR_NOT_CONVERGED) {
             /* A failed pair stands in with its nominal displacement, so that
              * every ping stays reached, but weighs (almost) nothing. */

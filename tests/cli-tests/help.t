@@ -111,6 +111,11 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
   first two pings are used. Where the file holds ground truth, prints the
   true values and the errors.
   
+  A single pair's verdict lacks the run's checks: `sasnav navigate` also
+  flags a pair whose eta stands far above its run's (a bright feature just
+  under the compact gate can pull an estimate that passes here as 'ok':
+  docs/navigation.md, "On scenarios drawn at random").
+  
     --p I, --q J      ping indices (0-based)
     --json            machine-readable output
     --k K, --i I      CGLS and alternating-projection iterations of the
@@ -261,7 +266,7 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                          [--search-grid G] [--coincidence F] [--compact-contrast C]
                          [--eta-outlier R] [--equalise M] [--no-aiding] [--no-resolve]
                          [--motion-sigma S,W,Y] [--speed-lags none|dvl|pairs]
-                         [--aiding-bias S,W,Y] [--link-sigma S,W,Y]
+                         [--aiding-bias S,W,Y] [--link-sigma S,W,Y] [--link-eta E]
                          [--threads N] [--gpu] [--json] [--checkpoint FILE]
                          [--first-pose X,Y,YAW | --anchor-truth] -o nav.h5
          sasnav navigate run.h5 --virtual-array K [--interleave M] [--stride S]
@@ -361,6 +366,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       aiding (without it, the motion model) more weight
                       (at about 5 dB and below the pairs' surge is biased:
                       docs/navigation.md, "Below 10 dB")
+    --link-eta E      a pair whose final eta exceeds E has its standard
+                      deviations in the fusion multiplied by (eta / E)^2:
+                      noisy pairs (low SNR) weigh less (default 0.2; 0:
+                      off, every ok pair weighs --link-sigma)
     --first-pose X,Y,YAW  place the trajectory so that the first ping's PCA
                       centroid is at this world pose (an external fix:
                       GNSS, USBL); default: the run's nominal first ping

@@ -406,6 +406,7 @@ class NavigateOpts(Structure):  # navigate.h
         ("dpca", DpcaOpts),
         ("link_sigma", Pose),
         ("long_sigma", Pose),
+        ("link_eta", c_double),
         ("align", c_int),
         ("resolve", c_int),
         ("use_aiding", c_int),

@@ -1312,7 +1312,7 @@ def navigate(run, *, pair=None, dpca=None, progress=None, done=None, **opts):
     file as the pairs need them). opts: any field of sasnav_navigate_opts
     (navigate.h) by name: method
     ("subspace", "dpca", "aiding"), long_baselines, align, resolve,
-    use_aiding, motion_sigma=(s, w, y), link_sigma, long_sigma, eta_weight,
+    use_aiding, motion_sigma=(s, w, y), link_sigma, long_sigma, link_eta, eta_weight,
     aiding_gate, eta_outlier (math.inf: off), speed_lags ("none", "dvl" (default), "pairs"), aiding_bias_sigma,
     tx_yaw ("auto" (default), "pairs", "none": a multi-transmitter head's
     turn between transmission and reception, as `--tx-yaw`), threads (= nthreads); any other keyword that names a field of
