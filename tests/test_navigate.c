@@ -874,6 +874,7 @@ static void test_eta_outlier(void)
     double flagged_surge = nav.n_pairs > 3 ? nav.pairs[3].fused.x : NAN;
     sasnav_navigation_free(&nav);
     o.eta_outlier = INFINITY;
+    o.link_eta = 0; /* the fixed link sigma (the eta scaling: below) */
     CHECK_OK(sasnav_navigate(run, &o, &nav));
     double kept_surge = nav.n_pairs > 3 ? nav.pairs[3].fused.x : NAN;
     CHECK(isnan(nav.eta_median) && nav.n_eta_outliers == 0 && nav.n_flagged == 0,
@@ -881,6 +882,26 @@ static void test_eta_outlier(void)
     CHECK(fabs(flagged_surge) < 0.2 * slip && kept_surge > 0.8 * slip,
           "slipped pair's fused surge: %.2f mm flagged, %.2f mm passed", 1e3 * flagged_surge, 1e3 * kept_surge);
     sasnav_navigation_free(&nav);
+    /* opts.link_eta (default 0.2): the unflagged slip's standard deviations
+     * grow by (0.60 / 0.2)^2 = 9 (surge 9 mm); its neighbours (eta 0.18,
+     * 0.19) keep 1 mm. With the neighbours held at 0 the smoother's surge
+     * would be slip w / (w + 2 m), w = 1 / (9 mm)^2, m = 1 / (10 mm)^2 (two
+     * motion-model links): 9.54 mm; the neighbours give way by about m / (1
+     * mm)^-2 = 1 % of it each, which lifts it by about 0.1 mm: within 0.3 mm
+     * of 9.54. Sway and yaw stay 0 (estimates and truth 0). */
+    {
+        sasnav_navigate_opts d;
+        sasnav_navigate_default_opts(&d);
+        CHECK(d.link_eta == 0.2, "default link_eta %g", d.link_eta);
+        o.link_eta = d.link_eta;
+        CHECK_OK(sasnav_navigate(run, &o, &nav));
+        double w = 1.0 / (9e-3 * 9e-3), m = 1.0 / (0.01 * 0.01), want = slip * w / (w + 2 * m);
+        double got = nav.n_pairs > 3 ? nav.pairs[3].fused.x : NAN;
+        CHECK(fabs(got - want) < 3e-4 && fabs(nav.pairs[3].fused.y) < 1e-9 && fabs(nav.pairs[3].fused.theta) < 1e-9,
+              "link_eta 0.2: the slip's fused motion error %.3f mm %.2e m %.2e rad, surge expected %.3f mm",
+              1e3 * got, nav.pairs[3].fused.y, nav.pairs[3].fused.theta, 1e3 * want);
+        sasnav_navigation_free(&nav);
+    }
     /* the line on either side of the pair's ratio 2.857 */
     o.eta_outlier = 2.85;
     CHECK_OK(sasnav_navigate(run, &o, &nav));
