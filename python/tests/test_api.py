@@ -80,6 +80,8 @@ def test_bad_arguments(paper_pair, tmp_path):
         sasnav.navigate(paper_pair.subset([0]))
     with pytest.raises(sasnav.Error, match="eta outlier factor"):
         sasnav.navigate(paper_pair, eta_outlier=1.0)
+    with pytest.raises(sasnav.Error, match="link_eta"):
+        sasnav.navigate(paper_pair, link_eta=-0.1)
     with pytest.raises(sasnav.Error):
         sasnav.Grid.make(1.0, 0.0, 10, 9.0, 10.0, 10)
     with pytest.raises(ValueError):
