@@ -160,13 +160,20 @@ int main(int argc, char **argv)
                 !(link_sigma.x > 0 && link_sigma.y > 0 && link_sigma.theta > 0))
                 return 2;
         } else if (!strcmp(argv[a], "--link-eta") && a + 1 < argc) {
-            link_eta = atof(argv[++a]);
-            if (!(link_eta >= 0)) return 2;
+            char *end;
+            link_eta = strtod(argv[++a], &end);
+            if (end == argv[a] || *end || !(link_eta >= 0)) {
+                fprintf(stderr, "bench_trust: --link-eta needs an eta >= 0 (0: off)\n");
+                return 2;
+            }
         } else if (!strcmp(argv[a], "--alt-link-eta") && a + 1 < argc) {
             for (char *tok = strtok(argv[++a], ","); tok; tok = strtok(NULL, ",")) {
-                if (n_alt == MAX_ALT) return 2;
-                alt_eta[n_alt] = atof(tok);
-                if (!(alt_eta[n_alt] >= 0)) return 2;
+                char *end;
+                if (n_alt < MAX_ALT) alt_eta[n_alt] = strtod(tok, &end);
+                if (n_alt == MAX_ALT || end == tok || *end || !(alt_eta[n_alt] >= 0)) {
+                    fprintf(stderr, "bench_trust: --alt-link-eta needs 1 to %d etas >= 0\n", MAX_ALT);
+                    return 2;
+                }
                 n_alt++;
             }
         } else {
@@ -184,6 +191,12 @@ int main(int argc, char **argv)
         fprintf(stderr, "bench_trust: without a gyro or a DVL there is no 'aiding' row\n");
     }
     if (ns < 1 || threads < 0 || speed_lags < 0 || speed_lags > 2 || k_final < 0 || i_final < 0) return 2;
+    if (n_alt && speed_lags == 2) {
+        /* the subspace row's two passes give each pair its own offsets; a
+         * reused navigation re-estimates without them: not an A/B */
+        fprintf(stderr, "bench_trust: --alt-link-eta with --speed-lags 2 would compare other estimates\n");
+        return 2;
+    }
     FILE *pf = pairs_path ? fopen(pairs_path, "w") : NULL;
     if (pairs_path && !pf) {
         fprintf(stderr, "bench_trust: cannot write %s\n", pairs_path);
@@ -215,7 +228,7 @@ int main(int argc, char **argv)
            "scale %.3g)\n",
            aid.gyro ? "on" : "off", aid.gyro_arw, aid.gyro_bias, aid.dvl ? "on" : "off", aid.dvl_noise,
            aid.dvl_bias, aid.dvl_scale);
-    printf("%6s %-10s %6s %9s %8s %14s %14s %12s %10s\n", "seed", "method", "slips", "unflagged",
+    printf("%6s %-16s %6s %9s %8s %14s %14s %12s %10s\n", "seed", "method", "slips", "unflagged",
            "flagged", "final sway mm", "final surge mm", "final yaw", "s/pair");
     for (long s = s0; s < s0 + ns; s++) {
         int r = (int)(s - s0);
@@ -289,7 +302,7 @@ int main(int argc, char **argv)
             st[m].flagged += flagged;
             st[m].pairs += nv->n_pairs;
             st[m].within += fabs(f.y) <= lambda / 25;
-            printf("%6ld %-10s %6d %9d %8d %+14.4f %+14.3f %+12.3e %10.2f\n", s, row_name[m], slips,
+            printf("%6ld %-16s %6d %9d %8d %+14.4f %+14.3f %+12.3e %10.2f\n", s, row_name[m], slips,
                    unflagged, flagged, 1e3 * f.y, 1e3 * f.x, f.theta, nv->seconds_per_pair);
         }
         if (pf && use[M_SUB]) {

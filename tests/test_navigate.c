@@ -887,8 +887,8 @@ static void test_eta_outlier(void)
      * 0.19) keep 1 mm. With the neighbours held at 0 the smoother's surge
      * would be slip w / (w + 2 m), w = 1 / (9 mm)^2, m = 1 / (10 mm)^2 (two
      * motion-model links): 9.54 mm; the neighbours give way by about m / (1
-     * mm)^-2 = 1 % of it each, which lifts it by about 0.1 mm: within 0.3 mm
-     * of 9.54. Sway and yaw stay 0 (estimates and truth 0). */
+     * mm)^-2 = 1 % of it each, which lifts it by about 0.06 mm: within 0.3
+     * mm of 9.54. Sway and yaw stay 0 (estimates and truth 0). */
     {
         sasnav_navigate_opts d;
         sasnav_navigate_default_opts(&d);

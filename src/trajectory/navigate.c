@@ -767,11 +767,12 @@ static int coincidence_only(const nav_ctx *ctx, int verdict, const sasnav_naviga
 }
 
 /* An estimate's standard deviations scaled by its final eta
- * (opts.link_eta): (eta / link_eta)^2 above link_eta, 1 below. */
+ * (opts.link_eta): (eta / link_eta)^2 above link_eta (an infinite eta:
+ * infinite), 1 below or where eta is NaN. */
 static sasnav_pose eta_scaled(const nav_ctx *ctx, sasnav_pose s, double eta)
 {
     double e0 = ctx->opts->link_eta;
-    if (e0 > 0 && isfinite(e0) && eta > e0 && isfinite(eta)) {
+    if (e0 > 0 && isfinite(e0) && eta > e0) {
         double f = (eta / e0) * (eta / e0);
         s = (sasnav_pose){f * s.x, f * s.y, f * s.theta};
     }
@@ -1337,8 +1338,10 @@ static int solve_centroids(const nav_ctx *ctx, sasnav_navigation *out, sasnav_po
     for (int j = 0; j < out->n_pairs; j++) {
         sasnav_navigate_pair pair, *np = &pair;
         get_pair(ctx, j, np);
-        sasnav_pose s = eta_scaled(ctx, np->q - np->p == 1 ? ctx->opts->link_sigma : ctx->opts->long_sigma,
-                                   np->result.eta);
+        /* (fixed standard deviations here: the consecutive pairs carry
+         * their fused values already, weighed by link_eta in the
+         * smoother; the long baselines' weights by eta are not measured) */
+        sasnav_pose s = np->q - np->p == 1 ? ctx->opts->link_sigma : ctx->opts->long_sigma;
         if (np->status != SASNAV_OK && np->status != SASNAV_ERR_NOT_CONVERGED) {
             /* A failed pair stands in with its nominal displacement, so that
              * every ping stays reached, but weighs (almost) nothing. */
