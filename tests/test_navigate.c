@@ -882,25 +882,55 @@ static void test_eta_outlier(void)
     CHECK(fabs(flagged_surge) < 0.2 * slip && kept_surge > 0.8 * slip,
           "slipped pair's fused surge: %.2f mm flagged, %.2f mm passed", 1e3 * flagged_surge, 1e3 * kept_surge);
     sasnav_navigation_free(&nav);
-    /* opts.link_eta (default 0.2): the unflagged slip's standard deviations
-     * grow by (0.60 / 0.2)^2 = 9 (surge 9 mm); its neighbours (eta 0.18,
-     * 0.19) keep 1 mm. With the neighbours held at 0 the smoother's surge
-     * would be slip w / (w + 2 m), w = 1 / (9 mm)^2, m = 1 / (10 mm)^2 (two
-     * motion-model links): 9.54 mm; the neighbours give way by about m / (1
-     * mm)^-2 = 1 % of it each, which lifts it by about 0.06 mm: within 0.3
-     * mm of 9.54. Sway and yaw stay 0 (estimates and truth 0). */
+    /* opts.link_eta (default 0.2). Without aiding it changes nothing: the
+     * same bits as link_eta 0 (kept_surge above). With aiding fused, the
+     * unflagged slip's standard deviations grow by (0.60 / 0.2)^2 = 9
+     * (surge 9 mm); its neighbours (eta 0.18, 0.19) keep 1 mm. The aiding
+     * here is made to weigh nothing (every standard deviation 1e9, no
+     * aiding bias term), so the smoother is the one above with the slip
+     * weighed down. With the neighbours held at 0 its surge would be slip
+     * w / (w + 2 m), w = 1 / (9 mm)^2, m = 1 / (10 mm)^2 (two motion-model
+     * links): 9.54 mm; the neighbours give way by about m / (1 mm)^-2 = 1 %
+     * of it each, which lifts it by about 0.06 mm: within 0.3 mm of 9.54.
+     * Sway and yaw stay 0 (estimates and truth 0). */
     {
         sasnav_navigate_opts d;
         sasnav_navigate_default_opts(&d);
         CHECK(d.link_eta == 0.2, "default link_eta %g", d.link_eta);
         o.link_eta = d.link_eta;
         CHECK_OK(sasnav_navigate(run, &o, &nav));
-        double w = 1.0 / (9e-3 * 9e-3), m = 1.0 / (0.01 * 0.01), want = slip * w / (w + 2 * m);
-        double got = nav.n_pairs > 3 ? nav.pairs[3].fused.x : NAN;
-        CHECK(fabs(got - want) < 3e-4 && fabs(nav.pairs[3].fused.y) < 1e-9 && fabs(nav.pairs[3].fused.theta) < 1e-9,
-              "link_eta 0.2: the slip's fused motion error %.3f mm %.2e m %.2e rad, surge expected %.3f mm",
-              1e3 * got, nav.pairs[3].fused.y, nav.pairs[3].fused.theta, 1e3 * want);
+        double unaided = nav.n_pairs > 3 ? nav.pairs[3].fused.x : NAN;
+        CHECK(unaided == kept_surge, "link_eta without aiding: %.6f mm against %.6f mm", 1e3 * unaided,
+              1e3 * kept_surge);
         sasnav_navigation_free(&nav);
+        sasnav_aiding ai;
+        double t[N], rate[N], rate_s[N], vel[2 * N], vel_s[2 * N];
+        for (int p = 0; p < N; p++) {
+            t[p] = 0.1 * p;
+            rate[p] = 0;
+            rate_s[p] = 1e9;
+            vel[2 * p] = 2.0;
+            vel[2 * p + 1] = 0;
+            vel_s[2 * p] = vel_s[2 * p + 1] = 1e9;
+        }
+        ai = (sasnav_aiding){t, rate, rate_s, vel, vel_s};
+        run->aiding = &ai;
+        o.use_aiding = 1;
+        o.aiding_bias_sigma = (sasnav_pose){0, 0, 0};
+        int rc = sasnav_navigate(run, &o, &nav);
+        run->aiding = NULL;
+        CHECK_OK(rc);
+        if (!rc) {
+            double w = 1.0 / (9e-3 * 9e-3), m = 1.0 / (0.01 * 0.01), want = slip * w / (w + 2 * m);
+            double got = nav.n_pairs > 3 ? nav.pairs[3].fused.x : NAN;
+            CHECK(fabs(got - want) < 3e-4 && fabs(nav.pairs[3].fused.y) < 1e-9 &&
+                      fabs(nav.pairs[3].fused.theta) < 1e-9,
+                  "link_eta 0.2 with aiding: the slip's fused motion error %.3f mm %.2e m %.2e rad, surge "
+                  "expected %.3f mm",
+                  1e3 * got, nav.pairs[3].fused.y, nav.pairs[3].fused.theta, 1e3 * want);
+            sasnav_navigation_free(&nav);
+        }
+        o.use_aiding = 0;
     }
     /* the line on either side of the pair's ratio 2.857 */
     o.eta_outlier = 2.85;

@@ -147,16 +147,19 @@ typedef struct {
                                  subspace estimator's measured spread, SPEC 6) */
     sasnav_pose long_sigma;   /* same for (p, p + 2) (default twice link_sigma:
                                  fewer phase centres overlap) */
-    double link_eta;          /* a consecutive pair's standard deviations in
-                                 the smoother grow with its final eta above
-                                 this: link_sigma x (eta / link_eta)^2, so
-                                 that the pairs of a noisy run weigh less
-                                 against the aiding and the motion model
+    double link_eta;          /* with aiding fused, a consecutive pair's
+                                 standard deviations in the smoother grow
+                                 with its final eta above this: link_sigma
+                                 x (eta / link_eta)^2, so that the pairs of
+                                 a noisy run weigh less against the aiding
                                  (their surge and sway errors grow about so
                                  with eta at low SNR, the yaw's less: a
                                  conservative factor there;
                                  docs/navigation.md, "Standard deviations
-                                 that grow with eta"). The long baselines'
+                                 that grow with eta"). Without aiding they
+                                 stay link_sigma (the motion model is a
+                                 loose bridge, not a measurement to weigh
+                                 ok pairs against); the long baselines'
                                  least squares keeps long_sigma. Default
                                  0.2; 0 or +inf: off (the fixed
                                  link_sigma) */

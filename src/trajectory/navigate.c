@@ -779,10 +779,13 @@ static sasnav_pose eta_scaled(const nav_ctx *ctx, sasnav_pose s, double eta)
     return s;
 }
 
-/* Standard deviations of a pair's estimate in the smoother. */
-static sasnav_pose estimate_sigma(const nav_ctx *ctx, const sasnav_navigate_pair *np)
+/* Standard deviations of a pair's estimate in the smoother. Grown with
+ * its eta only against aiding: without it the motion model is a loose
+ * bridge, and an ok pair should stay its own estimate
+ * (docs/navigation.md, "Standard deviations that grow with eta"). */
+static sasnav_pose estimate_sigma(const nav_ctx *ctx, const sasnav_navigate_pair *np, int with_aiding)
 {
-    sasnav_pose s = eta_scaled(ctx, ctx->opts->link_sigma, np->result.eta);
+    sasnav_pose s = with_aiding ? eta_scaled(ctx, ctx->opts->link_sigma, np->result.eta) : ctx->opts->link_sigma;
     if (ctx->opts->method == SASNAV_METHOD_AIDING) return (sasnav_pose){INFINITY, INFINITY, INFINITY};
     if (np->resolution == SASNAV_RESOLVED_BRIDGED || !usable(np) ||
         np->verdict == SASNAV_VERDICT_FAILED || np->verdict == SASNAV_VERDICT_NO_OVERLAP)
@@ -1065,7 +1068,7 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
     for (int j = 0; j < n; j++) {
         get_pair(ctx, j, np);
         m[j] = np->result.error;
-        sm[j] = estimate_sigma(ctx, np);
+        sm[j] = estimate_sigma(ctx, np, with_aiding);
     }
     rc = fuse_smooth_bias(n, m, sm, a, sa, o->motion_sigma, 3.0,
                           with_aiding ? o->aiding_bias_sigma : (sasnav_pose){0, 0, 0}, e, NULL);

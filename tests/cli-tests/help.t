@@ -366,10 +366,11 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       aiding (without it, the motion model) more weight
                       (at about 5 dB and below the pairs' surge is biased:
                       docs/navigation.md, "Below 10 dB")
-    --link-eta E      a pair whose final eta exceeds E has its standard
-                      deviations in the fusion multiplied by (eta / E)^2:
-                      noisy pairs (low SNR) weigh less (default 0.2; 0:
-                      off, every ok pair weighs --link-sigma)
+    --link-eta E      with aiding fused, a pair whose final eta exceeds E
+                      has its standard deviations multiplied by
+                      (eta / E)^2: noisy pairs (low SNR) weigh less
+                      against the aiding (default 0.2; 0: off, every ok
+                      pair weighs --link-sigma, as without aiding)
     --first-pose X,Y,YAW  place the trajectory so that the first ping's PCA
                       centroid is at this world pose (an external fix:
                       GNSS, USBL); default: the run's nominal first ping
