@@ -57,7 +57,7 @@
  * subspace and fused+lags rows again with each link_eta, reusing their
  * estimates (rows "subspace@E", "fused+lags@E"): an A/B of the fusion's
  * weights on the same pair estimates (link_eta acts only where aiding is
- * fused: "subspace@E" checks that it leaves the unaided rows as they are).
+ * fused: "subspace@E" shows the unaided rows left as they are).
  * --gpu runs the subspace rows' error evaluations on a CUDA GPU (builds with
  * -DSASNAV_CUDA=ON; docs/estimator.md, "GPU": the CPU's estimates to float
  * rounding, not to the bit). */

@@ -883,7 +883,7 @@ static void test_eta_outlier(void)
           "slipped pair's fused surge: %.2f mm flagged, %.2f mm passed", 1e3 * flagged_surge, 1e3 * kept_surge);
     sasnav_navigation_free(&nav);
     /* opts.link_eta (default 0.2). Without aiding it changes nothing: the
-     * same bits as link_eta 0 (kept_surge above). With aiding fused, the
+     * same bits as link_eta 0 (kept_surge above). With a DVL fused, the
      * unflagged slip's standard deviations grow by (0.60 / 0.2)^2 = 9
      * (surge 9 mm); its neighbours (eta 0.18, 0.19) keep 1 mm. The aiding
      * here is made to weigh nothing (every standard deviation 1e9, no
@@ -928,6 +928,20 @@ static void test_eta_outlier(void)
                   "link_eta 0.2 with aiding: the slip's fused motion error %.3f mm %.2e m %.2e rad, surge "
                   "expected %.3f mm",
                   1e3 * got, nav.pairs[3].fused.y, nav.pairs[3].fused.theta, 1e3 * want);
+            sasnav_navigation_free(&nav);
+        }
+        /* A gyro alone: the surge has no aiding to weigh the pair against,
+         * so it is not scaled and the slip's fused surge is the unaided
+         * one (the smoother works per component). */
+        ai.velocity = ai.velocity_sigma = NULL;
+        run->aiding = &ai;
+        rc = sasnav_navigate(run, &o, &nav);
+        run->aiding = NULL;
+        CHECK_OK(rc);
+        if (!rc) {
+            double got = nav.n_pairs > 3 ? nav.pairs[3].fused.x : NAN;
+            CHECK(fabs(got - kept_surge) < 1e-12, "link_eta with a gyro alone: surge %.6f mm against %.6f mm",
+                  1e3 * got, 1e3 * kept_surge);
             sasnav_navigation_free(&nav);
         }
         o.use_aiding = 0;

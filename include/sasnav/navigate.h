@@ -150,8 +150,11 @@ typedef struct {
     double link_eta;          /* with aiding fused, a consecutive pair's
                                  standard deviations in the smoother grow
                                  with its final eta above this: link_sigma
-                                 x (eta / link_eta)^2, so that the pairs of
-                                 a noisy run weigh less against the aiding
+                                 x (eta / link_eta)^2, in the components
+                                 the pair's aiding measures (surge and sway
+                                 with a DVL, yaw with a gyro), so that the
+                                 pairs of a noisy run weigh less against
+                                 the aiding
                                  (their surge and sway errors grow about so
                                  with eta at low SNR, the yaw's less: a
                                  conservative factor there;

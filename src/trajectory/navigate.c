@@ -768,24 +768,27 @@ static int coincidence_only(const nav_ctx *ctx, int verdict, const sasnav_naviga
 
 /* An estimate's standard deviations scaled by its final eta
  * (opts.link_eta): (eta / link_eta)^2 above link_eta (an infinite eta:
- * infinite), 1 below or where eta is NaN. */
-static sasnav_pose eta_scaled(const nav_ctx *ctx, sasnav_pose s, double eta)
+ * infinite), 1 below or where eta is NaN; only in the components that
+ * the pair's aiding measures (finite sa): elsewhere the motion model is
+ * a loose bridge, and an ok pair should stay its own estimate
+ * (docs/navigation.md, "Standard deviations that grow with eta"). */
+static sasnav_pose eta_scaled(const nav_ctx *ctx, sasnav_pose s, double eta, sasnav_pose sa)
 {
     double e0 = ctx->opts->link_eta;
     if (e0 > 0 && isfinite(e0) && eta > e0) {
         double f = (eta / e0) * (eta / e0);
-        s = (sasnav_pose){f * s.x, f * s.y, f * s.theta};
+        if (isfinite(sa.x)) s.x *= f;
+        if (isfinite(sa.y)) s.y *= f;
+        if (isfinite(sa.theta)) s.theta *= f;
     }
     return s;
 }
 
-/* Standard deviations of a pair's estimate in the smoother. Grown with
- * its eta only against aiding: without it the motion model is a loose
- * bridge, and an ok pair should stay its own estimate
- * (docs/navigation.md, "Standard deviations that grow with eta"). */
-static sasnav_pose estimate_sigma(const nav_ctx *ctx, const sasnav_navigate_pair *np, int with_aiding)
+/* Standard deviations of a pair's estimate in the smoother, given the
+ * standard deviations of its aiding (+inf where none). */
+static sasnav_pose estimate_sigma(const nav_ctx *ctx, const sasnav_navigate_pair *np, sasnav_pose sa)
 {
-    sasnav_pose s = with_aiding ? eta_scaled(ctx, ctx->opts->link_sigma, np->result.eta) : ctx->opts->link_sigma;
+    sasnav_pose s = eta_scaled(ctx, ctx->opts->link_sigma, np->result.eta, sa);
     if (ctx->opts->method == SASNAV_METHOD_AIDING) return (sasnav_pose){INFINITY, INFINITY, INFINITY};
     if (np->resolution == SASNAV_RESOLVED_BRIDGED || !usable(np) ||
         np->verdict == SASNAV_VERDICT_FAILED || np->verdict == SASNAV_VERDICT_NO_OVERLAP)
@@ -1068,7 +1071,7 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
     for (int j = 0; j < n; j++) {
         get_pair(ctx, j, np);
         m[j] = np->result.error;
-        sm[j] = estimate_sigma(ctx, np, with_aiding);
+        sm[j] = estimate_sigma(ctx, np, sa[j]);
     }
     rc = fuse_smooth_bias(n, m, sm, a, sa, o->motion_sigma, 3.0,
                           with_aiding ? o->aiding_bias_sigma : (sasnav_pose){0, 0, 0}, e, NULL);

@@ -368,9 +368,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       docs/navigation.md, "Below 10 dB")
     --link-eta E      with aiding fused, a pair whose final eta exceeds E
                       has its standard deviations multiplied by
-                      (eta / E)^2: noisy pairs (low SNR) weigh less
-                      against the aiding (default 0.2; 0: off, every ok
-                      pair weighs --link-sigma, as without aiding)
+                      (eta / E)^2 where the aiding measures them: noisy
+                      pairs (low SNR) weigh less against the aiding
+                      (default 0.2; 0: off, every ok pair weighs
+                      --link-sigma, as without aiding)
     --first-pose X,Y,YAW  place the trajectory so that the first ping's PCA
                       centroid is at this world pose (an external fix:
                       GNSS, USBL); default: the run's nominal first ping
