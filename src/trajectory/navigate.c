@@ -788,11 +788,11 @@ static sasnav_pose eta_scaled(const nav_ctx *ctx, sasnav_pose s, double eta, sas
  * standard deviations of its aiding (+inf where none). */
 static sasnav_pose estimate_sigma(const nav_ctx *ctx, const sasnav_navigate_pair *np, sasnav_pose sa)
 {
-    sasnav_pose s = eta_scaled(ctx, ctx->opts->link_sigma, np->result.eta, sa);
     if (ctx->opts->method == SASNAV_METHOD_AIDING) return (sasnav_pose){INFINITY, INFINITY, INFINITY};
     if (np->resolution == SASNAV_RESOLVED_BRIDGED || !usable(np) ||
         np->verdict == SASNAV_VERDICT_FAILED || np->verdict == SASNAV_VERDICT_NO_OVERLAP)
         return (sasnav_pose){INFINITY, INFINITY, INFINITY};
+    sasnav_pose s = eta_scaled(ctx, ctx->opts->link_sigma, np->result.eta, sa);
     if (np->verdict == SASNAV_VERDICT_AMBIGUOUS && !coincidence_only(ctx, np->verdict, np)) {
         /* The surge-yaw slip direction is in doubt; sway is not. (A pair
          * the resolution re-estimated or moved to another candidate stays
