@@ -294,6 +294,8 @@ static void print_json(const char *input, const sasnav_navigation *nav)
         json_object_set_new(root, "final_yaw_error", json_null());
         json_object_set_new(root, "rms_sway_error", json_null());
     }
+    /* the smoother's prediction of the errors, truth or not */
+    json_object_set_new(root, "predicted_final_sigma", nav->sigma ? pose_json(nav->sigma[n - 1]) : json_null());
     json_t *pairs = json_array();
     for (int j = 0; j < nav->n_pairs; j++) {
         sasnav_navigate_pair pair;
@@ -342,6 +344,13 @@ static void print_json(const char *input, const sasnav_navigation *nav)
         for (int i = 0; i < n; i++) json_array_append_new(cum, pose_json(nav->cumulative[i]));
         json_object_set_new(root, "cumulative_error", cum);
     }
+    if (nav->sigma) {
+        json_t *sg = json_array();
+        for (int i = 0; i < n; i++) json_array_append_new(sg, pose_json(nav->sigma[i]));
+        json_object_set_new(root, "predicted_sigma", sg);
+    } else {
+        json_object_set_new(root, "predicted_sigma", json_null());
+    }
     json_object_set_new(root, "track_angle", real_or_null(nav->track_angle));
     json_object_set_new(root, "least_squares_iterations", json_integer(nav->lsq_iterations));
     json_object_set_new(root, "seconds", real_or_null(nav->seconds));
@@ -382,6 +391,11 @@ static void print_text(const sasnav_navigation *nav)
                1e3 * f.y, f.theta);
         printf("rms cumulative error:   surge %.3f mm, sway %.4f mm, yaw %.3e rad\n",
                1e3 * nav->rms_cumulative.x, 1e3 * nav->rms_cumulative.y, nav->rms_cumulative.theta);
+    }
+    if (nav->sigma) {
+        sasnav_pose s = nav->sigma[nav->n_pings - 1];
+        printf("predicted final standard deviation: surge %.3f mm, sway %.4f mm, yaw %.3e rad\n", 1e3 * s.x,
+               1e3 * s.y, s.theta);
     }
     if (nav_ranks > 1)
         printf("%d pairs in %.2f s (%.2f s per pair; %.2f pairs/s with %d processes of %d pair%s at a "

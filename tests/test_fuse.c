@@ -13,6 +13,7 @@
  *     estimate from the aiding. */
 #include "sasnav/error.h"
 #include "testutil.h"
+#include "sasnav/trajectory.h"
 #include "trajectory/fuse.h"
 
 #include <math.h>
@@ -223,10 +224,144 @@ static void test_bias(void)
     CHECK(bias.x > 1e-4, "bias estimate %.3f mm", 1e3 * bias.x);
 }
 
+/* Inverts the k x k matrix a (row-major, in place) by Gauss-Jordan with
+ * partial pivoting. */
+static void invert(int k, double *a)
+{
+    double *w = calloc((size_t)(k * 2 * k), sizeof *w);
+    for (int r = 0; r < k; r++) {
+        for (int c = 0; c < k; c++) w[r * 2 * k + c] = a[r * k + c];
+        w[r * 2 * k + k + r] = 1.0;
+    }
+    for (int c = 0; c < k; c++) {
+        int piv = c;
+        for (int r = c + 1; r < k; r++)
+            if (fabs(w[r * 2 * k + c]) > fabs(w[piv * 2 * k + c])) piv = r;
+        for (int t = 0; t < 2 * k; t++) {
+            double x = w[c * 2 * k + t];
+            w[c * 2 * k + t] = w[piv * 2 * k + t];
+            w[piv * 2 * k + t] = x;
+        }
+        double f = w[c * 2 * k + c];
+        for (int t = 0; t < 2 * k; t++) w[c * 2 * k + t] /= f;
+        for (int r = 0; r < k; r++) {
+            if (r == c) continue;
+            double g = w[r * 2 * k + c];
+            for (int t = 0; t < 2 * k; t++) w[r * 2 * k + t] -= g * w[c * 2 * k + t];
+        }
+    }
+    for (int r = 0; r < k; r++)
+        for (int c = 0; c < k; c++) a[r * k + c] = w[r * 2 * k + k + c];
+    free(w);
+}
+
+/* The trajectory's predicted standard deviations (fuse_pose_sigma, O(n)
+ * prefix sums of the factored system) against a slow direct reference:
+ * each component's posterior covariance from the dense inverse of the
+ * smoother's information matrix (the bias unknown included, then
+ * marginalised by taking the block), carried through numerical
+ * derivatives of the composed poses. Weights that couple the steps
+ * strongly (a motion model as tight as the estimates, a bridged step
+ * without an estimate, the aiding's bias in surge and sway), so that the
+ * tails and the bias term of the fast form matter. Tolerance: 1e-6
+ * relative (central differences of step 1e-6 on poses of order 1). */
+static void test_pose_sigma(void)
+{
+    enum { M = 12 };
+    sasnav_pose m[M], sm[M], a[M], sa[M], e[M], nom[M], disp[M], poses[M + 1], sigma[M + 1];
+    for (int j = 0; j < M; j++) {
+        m[j] = (sasnav_pose){1e-3 * sin(0.7 * j), 2e-5 * cos(0.3 * j), 5e-5 * sin(0.5 * j)};
+        sm[j] = (sasnav_pose){1e-3 * (1.0 + 0.3 * (j % 3)), 2e-5, 5e-5 * (1.0 + 0.5 * (j % 2))};
+        a[j] = (sasnav_pose){0.9e-3 * sin(0.7 * j), 1e-5, 1e-5 * j};
+        sa[j] = (sasnav_pose){5e-4, 1e-3, 2e-4};
+        nom[j] = (sasnav_pose){0.2, 0.004 * (j % 3), 0.01 - 0.002 * j};
+    }
+    sm[5] = (sasnav_pose){INFINITY, INFINITY, INFINITY}; /* a bridged step */
+    sa[7].theta = INFINITY;                             /* no gyro there */
+    sasnav_pose motion = {1e-3, 5e-5, 1e-4}, bs = {4e-4, 4e-4, 0};
+    double buf[9 * M];
+    fuse_posterior post;
+    for (int k = 0; k < 3; k++) {
+        post.d[k] = buf + 3 * k * M;
+        post.off[k] = buf + (3 * k + 1) * M;
+        post.yu[k] = buf + (3 * k + 2) * M;
+    }
+    CHECK_OK(fuse_smooth_post(M, m, sm, a, sa, motion, 0.0, bs, e, NULL, &post));
+    CHECK(post.denom[0] > 0 && post.denom[1] > 0 && post.denom[2] == 0, "bias terms %g %g %g", post.denom[0],
+          post.denom[1], post.denom[2]);
+    for (int j = 0; j < M; j++)
+        disp[j] = (sasnav_pose){nom[j].x + e[j].x, nom[j].y + e[j].y, nom[j].theta + e[j].theta};
+    sasnav_pose first = {1.0, -2.0, 0.3};
+    CHECK_OK(sasnav_traj_compose(first, disp, M + 1, poses));
+    CHECK_OK(fuse_pose_sigma(M, &post, poses, sigma));
+    /* Dense posterior covariance per component. */
+    static double cov[3][M][M];
+    for (int k = 0; k < 3; k++) {
+        int nb = comp(bs, k) > 0 ? 1 : 0, K = M + nb;
+        double *info = calloc((size_t)(K * K), sizeof *info);
+        double wm = 1.0 / (comp(motion, k) * comp(motion, k));
+        for (int j = 0; j < M; j++) {
+            double s1 = comp(sm[j], k), s2 = comp(sa[j], k);
+            double w1 = isfinite(s1) ? 1.0 / (s1 * s1) : 0.0, w2 = isfinite(s2) ? 1.0 / (s2 * s2) : 0.0;
+            info[j * K + j] += 1.0 + w1 + w2; /* the smoother's prior of 1 (m, rad) */
+            if (j + 1 < M) {
+                info[j * K + j] += wm;
+                info[(j + 1) * K + j + 1] += wm;
+                info[j * K + j + 1] -= wm;
+                info[(j + 1) * K + j] -= wm;
+            }
+            if (nb) {
+                info[j * K + M] += w2;
+                info[M * K + j] += w2;
+                info[M * K + M] += w2;
+            }
+        }
+        if (nb) info[M * K + M] += 1.0 / (comp(bs, k) * comp(bs, k));
+        invert(K, info);
+        for (int i = 0; i < M; i++)
+            for (int j = 0; j < M; j++) cov[k][i][j] = info[i * K + j];
+        free(info);
+    }
+    /* Numerical derivatives of every pose with respect to every step. */
+    const double h = 1e-6;
+    static double J[M + 1][3][3][M]; /* [ping][output][component][step] */
+    for (int k = 0; k < 3; k++)
+        for (int j = 0; j < M; j++) {
+            sasnav_pose dp[M], dm[M], pp[M + 1], pm[M + 1];
+            memcpy(dp, disp, sizeof dp);
+            memcpy(dm, disp, sizeof dm);
+            if (k == 0) dp[j].x += h, dm[j].x -= h;
+            else if (k == 1) dp[j].y += h, dm[j].y -= h;
+            else dp[j].theta += h, dm[j].theta -= h;
+            sasnav_traj_compose(first, dp, M + 1, pp);
+            sasnav_traj_compose(first, dm, M + 1, pm);
+            for (int i = 0; i <= M; i++) {
+                J[i][0][k][j] = (pp[i].x - pm[i].x) / (2 * h);
+                J[i][1][k][j] = (pp[i].y - pm[i].y) / (2 * h);
+                J[i][2][k][j] = (pp[i].theta - pm[i].theta) / (2 * h);
+            }
+        }
+    double worst = 0;
+    for (int i = 0; i <= M; i++)
+        for (int out = 0; out < 3; out++) {
+            double v = 0;
+            for (int k = 0; k < 3; k++)
+                for (int r = 0; r < M; r++)
+                    for (int c = 0; c < M; c++) v += J[i][out][k][r] * cov[k][r][c] * J[i][out][k][c];
+            double ref = sqrt(v), got = comp(sigma[i], out);
+            double rel = i == 0 ? fabs(got) : fabs(got - ref) / ref;
+            if (rel > worst) worst = rel;
+        }
+    printf("pose sigma: final %.4g m, %.4g m, %.4g rad; worst relative difference to the dense one %.2e\n",
+           sigma[M].x, sigma[M].y, sigma[M].theta, worst);
+    CHECK(worst < 1e-6, "predicted standard deviations differ from the dense reference by %.2e", worst);
+}
+
 int main(void)
 {
     test_choose();
     test_smooth();
     test_bias();
+    test_pose_sigma();
     return test_summary("test_fuse");
 }

@@ -371,6 +371,19 @@ struct sasnav_navigation {
                                      or opts.eta_outlier off) */
     int n_eta_outliers;           /* consecutive pairs over opts.eta_outlier x
                                      eta_median */
+    sasnav_pose *sigma;           /* n_pings predicted standard deviations of
+                                     centroids[] relative to the first (along,
+                                     across the aligned track, yaw; [0] = 0):
+                                     the smoother's posterior (its standard
+                                     deviations of the pairs, the aiding's
+                                     and the motion model's, Huber weights
+                                     as they ended) carried through the
+                                     chain, linearised. NULL where no
+                                     smoother ran (opts.resolve 0) or with
+                                     long baselines. As right as the
+                                     standard deviations it weighs with:
+                                     docs/navigation.md, "Predicted
+                                     standard deviations" */
 };
 
 /* Pair j (0 <= j < n_pairs) of `nav`, whether its pairs are packed

@@ -130,6 +130,13 @@ int fuse_smooth_bias(int n, const sasnav_pose *m, const sasnav_pose *sm, const s
                      const sasnav_pose *sa, sasnav_pose motion, double huber, sasnav_pose bias_sigma,
                      sasnav_pose *e, sasnav_pose *bias)
 {
+    return fuse_smooth_post(n, m, sm, a, sa, motion, huber, bias_sigma, e, bias, NULL);
+}
+
+int fuse_smooth_post(int n, const sasnav_pose *m, const sasnav_pose *sm, const sasnav_pose *a,
+                     const sasnav_pose *sa, sasnav_pose motion, double huber, sasnav_pose bias_sigma,
+                     sasnav_pose *e, sasnav_pose *bias, fuse_posterior *post)
+{
     if (bias) *bias = (sasnav_pose){0, 0, 0};
     if (n < 1) return SASNAV_OK;
     size_t sz = sizeof(double) * (size_t)n;
@@ -186,8 +193,17 @@ int fuse_smooth_bias(int n, const sasnav_pose *m, const sasnav_pose *sm, const s
                 double beta = sum_wa + 1.0 / (sb * sb);
                 bk = (sum_wa_a - ux) / (beta - uy);
                 for (int j = 0; j < n; j++) b[j] -= u[j] * bk;
+                if (post) {
+                    memcpy(post->yu[k], u, sz);
+                    post->denom[k] = beta - uy;
+                }
             } else {
                 tridiag_solve(n, d, o, b);
+                if (post) post->denom[k] = 0.0;
+            }
+            if (post) { /* d now holds D of T = L D L^T; o is untouched */
+                memcpy(post->d[k], d, sz);
+                memcpy(post->off[k], o, sz);
             }
             /* Huber weights of the estimates' residuals. */
             int changed = 0;
@@ -211,5 +227,99 @@ int fuse_smooth_bias(int n, const sasnav_pose *m, const sasnav_pose *sm, const s
     free(d2);
     free(o2);
     free(u);
+    return SASNAV_OK;
+}
+
+/* The derivatives of ping m's pose (x, y, heading) with respect to
+ * component k of step j < m have the form alpha(m) + h_j (fuse_pose_sigma):
+ * h_j written to h[0..2], alpha(m) to al[0..2] (al may be NULL). The step
+ * j moves ping j + 1 by R(psi_j) (surge, sway) in the frame of ping j; a
+ * yaw error of step j turns everything after ping j + 1 about it:
+ * d P_m / d theta_j = J (P_m - P_{j+1}), J (x, y) = (-y, x). */
+static void step_jacobian(int k, const sasnav_pose *poses, int j, int m, double *h, double *al)
+{
+    double c = cos(poses[j].theta), s = sin(poses[j].theta);
+    if (al) al[0] = al[1] = al[2] = 0.0;
+    if (k == 0) {
+        h[0] = c;
+        h[1] = s;
+        h[2] = 0.0;
+    } else if (k == 1) {
+        h[0] = -s;
+        h[1] = c;
+        h[2] = 0.0;
+    } else {
+        h[0] = poses[j + 1].y;
+        h[1] = -poses[j + 1].x;
+        h[2] = 1.0;
+        if (al) {
+            al[0] = -poses[m].y;
+            al[1] = poses[m].x;
+        }
+    }
+}
+
+int fuse_pose_sigma(int n, const fuse_posterior *post, const sasnav_pose *poses, sasnav_pose *sigma)
+{
+    if (n < 0 || !post || !poses || !sigma) return sasnav_set_error(SASNAV_ERR_ARG, "pose sigma: bad arguments");
+    sigma[0] = (sasnav_pose){0, 0, 0};
+    if (n == 0) return SASNAV_OK;
+    double *tau = malloc(sizeof(double) * 3 * (size_t)(n + 1));
+    if (!tau) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory for the trajectory's standard deviations");
+    /* tau_k[m] = sum_{i >= m} prod_{r = m..i} l_r^2 / D_i, the tail of the
+     * forward substitution of a vector that ends at m - 1. */
+    for (int k = 0; k < 3; k++) {
+        double *t = tau + (size_t)k * (size_t)(n + 1);
+        const double *d = post->d[k], *o = post->off[k];
+        t[n] = 0.0;
+        for (int i = n - 1; i >= 1; i--) {
+            double l = o[i - 1] / d[i - 1];
+            t[i] = l * l * (1.0 / d[i] + t[i + 1]);
+        }
+        t[0] = 0.0; /* (unused) */
+    }
+    /* Running values per component: the forward substitutions A = L^-1 1
+     * and H = L^-1 h (prefixes do not depend on m), their prefix sums
+     * weighted by 1 / D, and the prefix sums against T^-1 u. */
+    double A[3] = {0}, H[3][3] = {{0}}, saa[3] = {0}, sah[3][3] = {{0}}, shh[3][3][3] = {{{0}}};
+    double su[3] = {0}, shu[3][3] = {{0}};
+    for (int mm = 1; mm <= n; mm++) {
+        int i = mm - 1; /* the step added: ping mm depends on steps 0..mm-1 */
+        double cov[3][3] = {{0}};
+        for (int k = 0; k < 3; k++) {
+            const double *d = post->d[k], *o = post->off[k];
+            double l = i > 0 ? o[i - 1] / d[i - 1] : 0.0, h[3], al[3];
+            step_jacobian(k, poses, i, mm, h, NULL);
+            A[k] = 1.0 - l * A[k];
+            for (int p = 0; p < 3; p++) H[k][p] = h[p] - l * H[k][p];
+            double w = 1.0 / d[i];
+            saa[k] += A[k] * A[k] * w;
+            for (int p = 0; p < 3; p++) {
+                sah[k][p] += A[k] * H[k][p] * w;
+                for (int q = 0; q < 3; q++) shh[k][p][q] += H[k][p] * H[k][q] * w;
+            }
+            int bias = post->denom[k] > 0 && post->yu[k];
+            if (bias) {
+                su[k] += post->yu[k][i];
+                for (int p = 0; p < 3; p++) shu[k][p] += h[p] * post->yu[k][i];
+            }
+            step_jacobian(k, poses, i, mm, h, al);
+            double tk = tau[(size_t)k * (size_t)(n + 1) + (size_t)mm], y[3], g[3];
+            for (int p = 0; p < 3; p++) {
+                y[p] = al[p] * A[k] + H[k][p];
+                g[p] = al[p] * su[k] + shu[k][p];
+            }
+            for (int p = 0; p < 3; p++)
+                for (int q = 0; q < 3; q++) {
+                    double c = al[p] * al[q] * saa[k] + al[p] * sah[k][q] + al[q] * sah[k][p] + shh[k][p][q] +
+                               y[p] * y[q] * tk;
+                    if (bias) c += g[p] * g[q] / post->denom[k];
+                    cov[p][q] += c;
+                }
+        }
+        sigma[mm] = (sasnav_pose){sqrt(fmax(cov[0][0], 0.0)), sqrt(fmax(cov[1][1], 0.0)),
+                                  sqrt(fmax(cov[2][2], 0.0))};
+    }
+    free(tau);
     return SASNAV_OK;
 }

@@ -49,4 +49,36 @@ int fuse_smooth_bias(int n, const sasnav_pose *m, const sasnav_pose *sm, const s
                      const sasnav_pose *sa, sasnav_pose motion, double huber, sasnav_pose bias_sigma,
                      sasnav_pose *e, sasnav_pose *b);
 
+/* What the smoother's last system was, per component k (0 surge, 1 sway,
+ * 2 yaw), for its posterior covariance: the system T e = r (tridiagonal,
+ * Huber weights at their last values) factored T = L D L^T, L unit lower
+ * bidiagonal with L[i][i-1] = off[k][i-1] / d[k][i-1]; with a bias term
+ * also yu[k] = T^-1 u (u: the aiding's weights) and the Schur complement's
+ * denominator denom[k] = beta - u^T T^-1 u (0: no bias term). The
+ * posterior covariance of e (the bias marginalised) is then T^-1 + yu
+ * yu^T / denom (Sherman-Morrison). Arrays of n doubles each, the caller's. */
+typedef struct {
+    double *d[3];
+    double *off[3];
+    double *yu[3];
+    double denom[3];
+} fuse_posterior;
+
+/* fuse_smooth_bias that also writes the last system into *post (may be
+ * NULL: the same as fuse_smooth_bias). */
+int fuse_smooth_post(int n, const sasnav_pose *m, const sasnav_pose *sm, const sasnav_pose *a,
+                     const sasnav_pose *sa, sasnav_pose motion, double huber, sasnav_pose bias_sigma,
+                     sasnav_pose *e, sasnav_pose *b, fuse_posterior *post);
+
+/* Standard deviations of the poses of pings 0..n (n + 1 poses: the
+ * composition of the n smoothed steps) relative to ping 0, in the frame of
+ * `poses` (the composed poses: x, y, heading), from the posterior of the
+ * steps' motion errors in *post, linearised about `poses`: for each ping
+ * the 3 x 3 covariance sum_k J_k^T C_k J_k over the components k, C_k the
+ * posterior covariance of component k of the steps (the components
+ * independent, as in the smoother). O(n) for all pings (prefix sums of the
+ * factored system). Writes sigma[0..n] (x, y, heading; sigma[0] = 0).
+ * Returns SASNAV_OK, SASNAV_ERR_ARG or SASNAV_ERR_NOMEM. */
+int fuse_pose_sigma(int n, const fuse_posterior *post, const sasnav_pose *poses, sasnav_pose *sigma);
+
 #endif

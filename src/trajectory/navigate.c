@@ -54,6 +54,7 @@ void sasnav_navigation_free(sasnav_navigation *nav)
     free(nav->anchored);
     free(nav->cumulative);
     free(nav->differential);
+    free(nav->sigma);
     memset(nav, 0, sizeof *nav);
 }
 
@@ -159,6 +160,8 @@ typedef struct {
     int two_pass;             /* opts.speed_lags 2: the first pass without the
                                  final stage (sasnav_pair_estimate_first),
                                  the offsets, then the final stages */
+    double *post_buf;         /* the smoother's last system (9 x pairs), or NULL */
+    fuse_posterior post;      /* ... its arrays (resolve_pairs) */
 } nav_ctx;
 
 /* Pair j, unpacked / packed again (pair_store.h). */
@@ -1073,8 +1076,20 @@ static int resolve_pairs(nav_ctx *ctx, sasnav_navigation *out)
         m[j] = np->result.error;
         sm[j] = estimate_sigma(ctx, np, sa[j]);
     }
-    rc = fuse_smooth_bias(n, m, sm, a, sa, o->motion_sigma, 3.0,
-                          with_aiding ? o->aiding_bias_sigma : (sasnav_pose){0, 0, 0}, e, NULL);
+    free(ctx->post_buf);
+    ctx->post_buf = malloc(sizeof(double) * 9 * (size_t)n);
+    if (!ctx->post_buf) {
+        rc = sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory in the trajectory smoother");
+        goto done;
+    }
+    for (int k = 0; k < 3; k++) {
+        ctx->post.d[k] = ctx->post_buf + (size_t)(3 * k) * (size_t)n;
+        ctx->post.off[k] = ctx->post_buf + (size_t)(3 * k + 1) * (size_t)n;
+        ctx->post.yu[k] = ctx->post_buf + (size_t)(3 * k + 2) * (size_t)n;
+        ctx->post.denom[k] = 0.0;
+    }
+    rc = fuse_smooth_post(n, m, sm, a, sa, o->motion_sigma, 3.0,
+                          with_aiding ? o->aiding_bias_sigma : (sasnav_pose){0, 0, 0}, e, NULL, &ctx->post);
     if (rc) goto done;
     for (int j = 0; j < n && !rc; j++) {
         get_pair(ctx, j, np);
@@ -1506,6 +1521,14 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
         rc = sasnav_traj_align(out->centroids, n, &out->track_angle);
         if (rc) return rc;
     }
+    if (ctx->post_buf && out->n_pairs == n - 1) {
+        /* The smoother's posterior carried through the chain (with long
+         * baselines the least squares re-weighs the links: not here). */
+        out->sigma = malloc(sizeof(sasnav_pose) * (size_t)n);
+        if (!out->sigma) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        rc = fuse_pose_sigma(n - 1, &ctx->post, out->centroids, out->sigma);
+        if (rc) return rc;
+    }
     rc = sasnav_traj_ping_poses(out->centroids, n, run->tx_lag, 0.0, out->nav);
     if (rc) return rc;
     if (run->truth) rc = compare_with_truth(ctx, out);
@@ -1554,7 +1577,8 @@ static int navigate_run(const sasnav_run *run, const sasnav_navigate_opts *opts,
     if (rc) return rc;
     nav_ctx ctx = {run, opts, NULL, 1, sasnav_now_seconds(),
                    run->array.n_rx > 1 ? 0.5 * fabs(run->array.rx_u[1] - run->array.rx_u[0]) : 0.025,
-                   NULL, NULL, NULL, 0, 0, part, n_parts, NULL, NULL, {0, NULL, NULL}, 0};
+                   NULL, NULL, NULL, 0, 0, part, n_parts, NULL, NULL, {0, NULL, NULL}, 0,
+                   NULL, {{NULL}, {NULL}, {NULL}, {0}}};
     ctx.two_pass = two_pass_mode(run, opts);
     ctx.digest = options_digest(run, opts);
     if (ctx.two_pass) {
@@ -1620,6 +1644,7 @@ static int navigate_run(const sasnav_run *run, const sasnav_navigate_opts *opts,
     free(ctx.estimators);
     free(ctx.lags);
     free(ctx.tx_yaw);
+    free(ctx.post_buf);
     out->seconds = sasnav_now_seconds() - ctx.t0;
     if (keys) *keys = ctx.keys;
     if (rc) {
