@@ -294,8 +294,8 @@ static void print_json(const char *input, const sasnav_navigation *nav)
         json_object_set_new(root, "final_yaw_error", json_null());
         json_object_set_new(root, "rms_sway_error", json_null());
     }
-    /* the smoother's prediction of the errors, truth or not */
-    json_object_set_new(root, "predicted_final_sigma", nav->sigma ? pose_json(nav->sigma[n - 1]) : json_null());
+    /* the smoother's formal standard deviations, truth or not */
+    json_object_set_new(root, "formal_final_sigma", nav->formal_sigma ? pose_json(nav->formal_sigma[n - 1]) : json_null());
     json_t *pairs = json_array();
     for (int j = 0; j < nav->n_pairs; j++) {
         sasnav_navigate_pair pair;
@@ -344,12 +344,12 @@ static void print_json(const char *input, const sasnav_navigation *nav)
         for (int i = 0; i < n; i++) json_array_append_new(cum, pose_json(nav->cumulative[i]));
         json_object_set_new(root, "cumulative_error", cum);
     }
-    if (nav->sigma) {
+    if (nav->formal_sigma) {
         json_t *sg = json_array();
-        for (int i = 0; i < n; i++) json_array_append_new(sg, pose_json(nav->sigma[i]));
-        json_object_set_new(root, "predicted_sigma", sg);
+        for (int i = 0; i < n; i++) json_array_append_new(sg, pose_json(nav->formal_sigma[i]));
+        json_object_set_new(root, "formal_sigma", sg);
     } else {
-        json_object_set_new(root, "predicted_sigma", json_null());
+        json_object_set_new(root, "formal_sigma", json_null());
     }
     json_object_set_new(root, "track_angle", real_or_null(nav->track_angle));
     json_object_set_new(root, "least_squares_iterations", json_integer(nav->lsq_iterations));
@@ -392,9 +392,9 @@ static void print_text(const sasnav_navigation *nav)
         printf("rms cumulative error:   surge %.3f mm, sway %.4f mm, yaw %.3e rad\n",
                1e3 * nav->rms_cumulative.x, 1e3 * nav->rms_cumulative.y, nav->rms_cumulative.theta);
     }
-    if (nav->sigma) {
-        sasnav_pose s = nav->sigma[nav->n_pings - 1];
-        printf("predicted final standard deviation: surge %.3f mm, sway %.4f mm, yaw %.3e rad\n", 1e3 * s.x,
+    if (nav->formal_sigma) {
+        sasnav_pose s = nav->formal_sigma[nav->n_pings - 1];
+        printf("formal final standard deviation:    surge %.3f mm, sway %.4f mm, yaw %.3e rad\n", 1e3 * s.x,
                1e3 * s.y, s.theta);
     }
     if (nav_ranks > 1)

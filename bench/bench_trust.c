@@ -78,6 +78,10 @@ static const char *const names[N_METHODS] = {"paper", "subspace", "dpca", "aidin
 
 typedef struct {
     double *final_sway, *final_surge, *final_yaw, *rms_sway;
+    double *z[3];       /* final error / predicted standard deviation (surge, sway, yaw) */
+    double *sd_sway;    /* predicted standard deviation of the final sway */
+    double p_within;    /* sum over runs of the predicted probability of lambda/25 */
+    int n_sd;           /* runs with a prediction */
     int slips, unflagged, flagged, pairs, within;
 } stats;
 
@@ -220,7 +224,11 @@ int main(int argc, char **argv)
         st[m].final_surge = calloc((size_t)ns, sizeof(double));
         st[m].final_yaw = calloc((size_t)ns, sizeof(double));
         st[m].rms_sway = calloc((size_t)ns, sizeof(double));
-        if (!st[m].final_sway || !st[m].final_surge || !st[m].final_yaw || !st[m].rms_sway) return 1;
+        for (int k = 0; k < 3; k++) st[m].z[k] = calloc((size_t)ns, sizeof(double));
+        st[m].sd_sway = calloc((size_t)ns, sizeof(double));
+        if (!st[m].final_sway || !st[m].final_surge || !st[m].final_yaw || !st[m].rms_sway || !st[m].z[0] ||
+            !st[m].z[1] || !st[m].z[2] || !st[m].sd_sway)
+            return 1;
     }
     setvbuf(stdout, NULL, _IOLBF, 0); /* one line per run as it ends (long studies) */
     printf("paper-trajectory with aiding, SNR %g dB, seeds %ld..%ld%s\n", snr, s0, s0 + ns - 1,
@@ -229,8 +237,8 @@ int main(int argc, char **argv)
            "scale %.3g)\n",
            aid.gyro ? "on" : "off", aid.gyro_arw, aid.gyro_bias, aid.dvl ? "on" : "off", aid.dvl_noise,
            aid.dvl_bias, aid.dvl_scale);
-    printf("%6s %-16s %6s %9s %8s %14s %14s %12s %10s\n", "seed", "method", "slips", "unflagged",
-           "flagged", "final sway mm", "final surge mm", "final yaw", "s/pair");
+    printf("%6s %-16s %6s %9s %8s %14s %14s %12s %10s %9s %9s %9s\n", "seed", "method", "slips", "unflagged",
+           "flagged", "final sway mm", "final surge mm", "final yaw", "s/pair", "sd sway", "sd surge", "sd yaw");
     for (long s = s0; s < s0 + ns; s++) {
         int r = (int)(s - s0);
         sasnav_run *run = bench_trajectory_run_aided(s, snr, &aid, NAN, NAN, NAN);
@@ -303,8 +311,19 @@ int main(int argc, char **argv)
             st[m].flagged += flagged;
             st[m].pairs += nv->n_pairs;
             st[m].within += fabs(f.y) <= lambda / 25;
-            printf("%6ld %-16s %6d %9d %8d %+14.4f %+14.3f %+12.3e %10.2f\n", s, row_name[m], slips,
-                   unflagged, flagged, 1e3 * f.y, 1e3 * f.x, f.theta, nv->seconds_per_pair);
+            /* the navigation's own prediction of these errors */
+            sasnav_pose sd = nv->formal_sigma ? nv->formal_sigma[nv->n_pings - 1] : (sasnav_pose){NAN, NAN, NAN};
+            if (nv->formal_sigma) {
+                int i = st[m].n_sd++;
+                st[m].z[0][i] = fabs(f.x) / sd.x;
+                st[m].z[1][i] = fabs(f.y) / sd.y;
+                st[m].z[2][i] = fabs(f.theta) / sd.theta;
+                st[m].sd_sway[i] = sd.y;
+                st[m].p_within += erf(lambda / 25 / (sqrt(2.0) * sd.y));
+            }
+            printf("%6ld %-16s %6d %9d %8d %+14.4f %+14.3f %+12.3e %10.2f %9.4f %9.3f %9.2e\n", s, row_name[m],
+                   slips, unflagged, flagged, 1e3 * f.y, 1e3 * f.x, f.theta, nv->seconds_per_pair, 1e3 * sd.y,
+                   1e3 * sd.x, sd.theta);
         }
         if (pf && use[M_SUB]) {
             const sasnav_navigation *nv = &nav[M_SUB];
@@ -344,7 +363,28 @@ int main(int argc, char **argv)
                row_name[m], t->slips, t->pairs, t->unflagged, t->flagged, 1e3 * sw50, 1e3 * sw95,
                1e3 * su50, 1e3 * su95, y50, y95, 1e3 * r50, 1e3 * r95, t->within, n);
     }
+    printf("\nThe navigation's predicted standard deviations (sd) of the final errors against the errors:\n"
+           "| method | runs | predicted sd of final sway mm, median | |error| / sd, median and p95: surge, "
+           "sway, yaw | within 2 sd: surge, sway, yaw | runs within lambda/25: predicted (sum of "
+           "probabilities) / seen |\n|---|---|---|---|---|---|\n");
     for (int m = 0; m < N_ROWS; m++) {
+        if (!use[m] || st[m].n_sd == 0) continue;
+        stats *t = &st[m];
+        int n = t->n_sd, in2[3] = {0, 0, 0};
+        for (int k = 0; k < 3; k++)
+            for (int i = 0; i < n; i++) in2[k] += t->z[k][i] <= 2.0;
+        double zm[3], zp[3];
+        for (int k = 0; k < 3; k++) {
+            zm[k] = percentile(t->z[k], n, 50);
+            zp[k] = percentile(t->z[k], n, 95);
+        }
+        printf("| %s | %d | %.3f | %.2f / %.2f, %.2f / %.2f, %.2f / %.2f | %d, %d, %d of %d | %.1f / %d |\n",
+               row_name[m], n, 1e3 * percentile(t->sd_sway, n, 50), zm[0], zp[0], zm[1], zp[1], zm[2], zp[2],
+               in2[0], in2[1], in2[2], n, t->p_within, t->within);
+    }
+    for (int m = 0; m < N_ROWS; m++) {
+        for (int k = 0; k < 3; k++) free(st[m].z[k]);
+        free(st[m].sd_sway);
         free(st[m].final_sway);
         free(st[m].final_surge);
         free(st[m].final_yaw);

@@ -371,7 +371,7 @@ struct sasnav_navigation {
                                      or opts.eta_outlier off) */
     int n_eta_outliers;           /* consecutive pairs over opts.eta_outlier x
                                      eta_median */
-    sasnav_pose *sigma;           /* n_pings predicted standard deviations of
+    sasnav_pose *formal_sigma;    /* n_pings formal standard deviations of
                                      centroids[] relative to the first (along,
                                      across the aligned track, yaw; [0] = 0):
                                      the smoother's posterior (its standard

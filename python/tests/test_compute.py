@@ -93,6 +93,21 @@ def test_navigate_short_run(short_trajectory, tmp_path):
     # two pairs: too few (6) for the run's median eta, no outlier
     assert math.isnan(nav.eta_median) and nav.n_eta_outliers == 0
     assert not any(pr.eta_outlier for pr in nav.pairs)
+    # formal standard deviations: two "ok" pairs weighed with the default
+    # link_sigma (1 mm, 20 microns, 5e-5 rad), the motion model far looser,
+    # so the steps' errors independent with those deviations: the final
+    # yaw sqrt(2) x 5e-5 rad; across the aligned track each step's surge
+    # and sway errors by its heading psi_j (the track turns: psi ~ 0.01
+    # rad), and the first step's yaw error turning the second step (lever:
+    # its along-track length); 2 % for the motion model and the prior
+    fs, c = nav.formal_sigma, nav.centroids
+    assert fs.shape == (3,) and fs[0]["x"] == fs[0]["y"] == fs[0]["theta"] == 0
+    assert fs[-1]["theta"] == pytest.approx(math.sqrt(2) * 5e-5, rel=0.02)
+    var_y = sum((1e-3 * math.sin(c[j]["theta"])) ** 2 + (2e-5 * math.cos(c[j]["theta"])) ** 2
+                for j in range(2))
+    var_y += (5e-5 * (c[2]["x"] - c[1]["x"])) ** 2
+    assert fs[-1]["y"] == pytest.approx(math.sqrt(var_y), rel=0.02)
+    assert fs[-1]["x"] == pytest.approx(math.sqrt(2) * 1e-3, rel=0.02)
     sasnav.write_nav(nav, tmp_path / "nav.h5")
     back = sasnav.read_nav(tmp_path / "nav.h5")
     assert np.array_equal(back.nav, nav.nav) and np.array_equal(back.truth, short_trajectory.truth)

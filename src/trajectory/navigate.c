@@ -54,7 +54,7 @@ void sasnav_navigation_free(sasnav_navigation *nav)
     free(nav->anchored);
     free(nav->cumulative);
     free(nav->differential);
-    free(nav->sigma);
+    free(nav->formal_sigma);
     memset(nav, 0, sizeof *nav);
 }
 
@@ -1524,9 +1524,9 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
     if (ctx->post_buf && out->n_pairs == n - 1) {
         /* The smoother's posterior carried through the chain (with long
          * baselines the least squares re-weighs the links: not here). */
-        out->sigma = malloc(sizeof(sasnav_pose) * (size_t)n);
-        if (!out->sigma) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
-        rc = fuse_pose_sigma(n - 1, &ctx->post, out->centroids, out->sigma);
+        out->formal_sigma = malloc(sizeof(sasnav_pose) * (size_t)n);
+        if (!out->formal_sigma) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
+        rc = fuse_pose_sigma(n - 1, &ctx->post, out->centroids, out->formal_sigma);
         if (rc) return rc;
     }
     rc = sasnav_traj_ping_poses(out->centroids, n, run->tx_lag, 0.0, out->nav);

@@ -483,7 +483,7 @@ class NavigationC(Structure):  # navigate.h: struct sasnav_navigation
         ("pairs_tx_yaw", c_int),
         ("eta_median", c_double),
         ("n_eta_outliers", c_int),
-        ("sigma", POINTER(Pose)),
+        ("formal_sigma", POINTER(Pose)),
     ]
 
 

@@ -1167,6 +1167,11 @@ class Navigation:
     #                       "gyro", "pairs" (the pairs' own yaw) or "none"
     eta_median: float = math.nan  # the run's median pair eta (NaN: not computed)
     n_eta_outliers: int = 0  # pairs over eta_outlier x eta_median
+    # formal standard deviations of the centroids relative to the first
+    # (POSE_DTYPE: along, across the aligned track, yaw): the smoother's
+    # posterior carried through the chain; None without a smoother or with
+    # long baselines (docs/navigation.md, "Formal standard deviations")
+    formal_sigma: Optional[np.ndarray] = None
 
     def placed(self, first_pose):
         """The estimated ping poses moved rigidly so that the first PCA
@@ -1219,7 +1224,8 @@ def _navigation_from_c(nv, truth):
         _pose(nv.rms_differential) if has_truth else None,
         nv.seconds, nv.seconds_per_pair, nv.pairs_per_second, nv.threads_over_pairs,
         "gyro" if nv.gyro_tx_yaw else "pairs" if nv.pairs_tx_yaw else "none",
-        nv.eta_median, nv.n_eta_outliers)
+        nv.eta_median, nv.n_eta_outliers,
+        _copy_out(_addr(nv.formal_sigma), POSE_DTYPE, n) if nv.formal_sigma else None)
 
 
 def _navigate_opts(pair, dpca, opts):
