@@ -263,8 +263,9 @@ static void invert(int k, double *a)
  * derivatives of the composed poses. Weights that couple the steps
  * strongly (a motion model as tight as the estimates, a bridged step
  * without an estimate, the aiding's bias in surge and sway), so that the
- * tails and the bias term of the fast form matter. Tolerance: 1e-6
- * relative (central differences of step 1e-6 on poses of order 1). */
+ * tails and the bias term of the fast form matter; the poses handed to
+ * it 6e6 m from the origin. Tolerance: 1e-6 relative (central
+ * differences of step 1e-6 on poses of order 1). */
 static void test_pose_sigma(void)
 {
     enum { M = 12 };
@@ -293,7 +294,11 @@ static void test_pose_sigma(void)
         disp[j] = (sasnav_pose){nom[j].x + e[j].x, nom[j].y + e[j].y, nom[j].theta + e[j].theta};
     sasnav_pose first = {1.0, -2.0, 0.3};
     CHECK_OK(sasnav_traj_compose(first, disp, M + 1, poses));
-    CHECK_OK(fuse_pose_sigma(M, &post, poses, sigma));
+    /* The poses far from the origin (world coordinates of a survey: UTM
+     * metres): the standard deviations depend on differences only. */
+    sasnav_pose far[M + 1];
+    for (int i = 0; i <= M; i++) far[i] = (sasnav_pose){poses[i].x + 4.5e5, poses[i].y + 6.1e6, poses[i].theta};
+    CHECK_OK(fuse_pose_sigma(M, &post, far, sigma));
     /* Dense posterior covariance per component. */
     static double cov[3][M][M];
     for (int k = 0; k < 3; k++) {

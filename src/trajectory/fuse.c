@@ -238,6 +238,10 @@ int fuse_smooth_post(int n, const sasnav_pose *m, const sasnav_pose *sm, const s
  * d P_m / d theta_j = J (P_m - P_{j+1}), J (x, y) = (-y, x). */
 static void step_jacobian(int k, const sasnav_pose *poses, int j, int m, double *h, double *al)
 {
+    /* (positions from ping 0's: only differences matter, and world
+     * coordinates of 1e6 m would cancel catastrophically in the prefix
+     * sums' alpha^2 S - 2 alpha S_h + S_hh) */
+    double x0 = poses[0].x, y0 = poses[0].y;
     double c = cos(poses[j].theta), s = sin(poses[j].theta);
     if (al) al[0] = al[1] = al[2] = 0.0;
     if (k == 0) {
@@ -249,12 +253,12 @@ static void step_jacobian(int k, const sasnav_pose *poses, int j, int m, double 
         h[1] = c;
         h[2] = 0.0;
     } else {
-        h[0] = poses[j + 1].y;
-        h[1] = -poses[j + 1].x;
+        h[0] = poses[j + 1].y - y0;
+        h[1] = -(poses[j + 1].x - x0);
         h[2] = 1.0;
         if (al) {
-            al[0] = -poses[m].y;
-            al[1] = poses[m].x;
+            al[0] = -(poses[m].y - y0);
+            al[1] = poses[m].x - x0;
         }
     }
 }
