@@ -29,7 +29,11 @@
  * slips (slips whose pair is "ok" and not bridged), flagged pairs, final
  * cumulative sway / surge / yaw errors and rms cumulative sway (median and
  * 95th percentile of the absolute values over the runs), and the runs with
- * final sway within lambda/25. --pairs FILE writes one line per subspace
+ * final sway within lambda/25; and the navigation's formal standard
+ * deviations of the final errors against them (sasnav_navigation
+ * formal_sigma: |error| / sd, runs within 2 sd, and the runs within
+ * lambda/25 that the formal sd predicts, the sum over runs of erf(lambda
+ * / 25 / (sqrt 2 sd))). --pairs FILE writes one line per subspace
  * pair (first estimate: error, eta, margin, verdict, candidates) for the
  * calibration of the verdict. --speed-lags sets opts.speed_lags of the
  * subspace navigation (its estimates are reused by paper and fused);
@@ -363,9 +367,9 @@ int main(int argc, char **argv)
                row_name[m], t->slips, t->pairs, t->unflagged, t->flagged, 1e3 * sw50, 1e3 * sw95,
                1e3 * su50, 1e3 * su95, y50, y95, 1e3 * r50, 1e3 * r95, t->within, n);
     }
-    printf("\nThe navigation's predicted standard deviations (sd) of the final errors against the errors:\n"
-           "| method | runs | predicted sd of final sway mm, median | |error| / sd, median and p95: surge, "
-           "sway, yaw | within 2 sd: surge, sway, yaw | runs within lambda/25: predicted (sum of "
+    printf("\nThe navigation's formal standard deviations (sd) of the final errors against the errors:\n"
+           "| method | runs | formal sd of final sway mm, median | |error| / sd, median and p95: surge, "
+           "sway, yaw | within 2 sd: surge, sway, yaw | runs within lambda/25: formal (sum of "
            "probabilities) / seen |\n|---|---|---|---|---|---|\n");
     for (int m = 0; m < N_ROWS; m++) {
         if (!use[m] || st[m].n_sd == 0) continue;

@@ -386,7 +386,10 @@ must be deliberate (`run.py SASNAV --update help.t`, then review the diff).
                       command is interrupted (Ctrl-C, kill, a crash), the same
                       command resumes from FILE and gives the same result
                       (docs/cli.md). FILE is removed once -o is written
-    --json            machine-readable summary on stdout
+    --json            machine-readable summary on stdout, with the
+                      trajectory's formal standard deviations (formal_sigma:
+                      the smoother's, as right as its weights; docs/
+                      navigation.md, "Formal standard deviations")
   
   Virtual arrays (single-channel sonars, AirSAS; docs/navigation.md,
   "Virtual arrays"): K consecutive pings form one virtual ping of K x N
