@@ -58,10 +58,25 @@ fi
 # Dead reckoning.
 "$CLI" navigate "$T/run.h5" --method aiding --json -o "$T/nava.h5" > "$T/nava.json" \
     2> "$T/nava.err" || { cat "$T/nava.err" >&2; fail "navigate --method aiding"; }
+# Each pair's own estimate (no smoother: no formal standard deviations).
+"$CLI" navigate "$T/run.h5" --k 2 --i 1 --range-extent 0.6 --no-resolve --json -o "$T/navr.h5" \
+    > "$T/navr.json" 2> "$T/navr.err" || { cat "$T/navr.err" >&2; fail "navigate --no-resolve"; }
 if [ -x /usr/bin/python3 ]; then
-    /usr/bin/python3 - "$T/nav.json" "$T/nav0.json" "$T/nava.json" <<'EOF' || fail "JSON content"
-import json, sys
-fused, alone, aid = (json.load(open(f)) for f in sys.argv[1:4])
+    /usr/bin/python3 - "$T/nav.json" "$T/nav0.json" "$T/nava.json" "$T/navr.json" <<'EOF' || fail "JSON content"
+import json, math, sys
+fused, alone, aid, raw = (json.load(open(f)) for f in sys.argv[1:5])
+# The formal standard deviations: one per ping, zero at the first, the
+# final one repeated; a navigation-grade gyro fused makes the final sway's
+# smaller than the pairs' alone (whose yaw, 5e-5 rad a pair, turns the
+# steps); none without the smoother.
+for d in (fused, alone, aid):
+    s = d["formal_sigma"]
+    assert len(s) == d["n_pings"] and s[0] == {"surge": 0, "sway": 0, "yaw": 0}, s[0]
+    assert d["formal_final_sigma"] == s[-1], (d["formal_final_sigma"], s[-1])
+    assert all(math.isfinite(v) and v > 0 for v in s[-1].values()), s[-1]
+assert fused["formal_final_sigma"]["sway"] < alone["formal_final_sigma"]["sway"], \
+    (fused["formal_final_sigma"], alone["formal_final_sigma"])
+assert raw["formal_sigma"] is None and raw["formal_final_sigma"] is None
 assert fused["aiding_used"] is True and alone["aiding_used"] is False, (fused["aiding_used"], alone["aiding_used"])
 assert aid["method"] == "aiding" and aid["aiding_used"] is True
 for d in (fused, alone):
