@@ -379,8 +379,8 @@ struct sasnav_navigation {
                                      and the motion model's, Huber weights
                                      as they ended) carried through the
                                      chain, linearised. NULL where no
-                                     smoother ran (opts.resolve 0) or with
-                                     long baselines. As right as the
+                                     smoother ran (opts.resolve 0), with
+                                     long baselines, and for DPCA. As right as the
                                      standard deviations it weighs with:
                                      docs/navigation.md, "Predicted
                                      standard deviations" */

@@ -121,6 +121,9 @@ def test_navigate_dpca_and_options(short_trajectory):
                           dpca={"upsampling": 4})
     assert nav.method == "dpca" and len(nav.pairs) == 2
     assert all(abs(pr.error.sway) < 1e-3 for pr in nav.pairs)
+    assert nav.formal_sigma is None  # no smoother (resolve=0)
+    # DPCA through the smoother: its surge is nominal, no formal deviations
+    assert sasnav.navigate(short_trajectory, method="dpca", threads=1).formal_sigma is None
 
 
 def test_image_point_target(point_run, source_dir):

@@ -1521,9 +1521,11 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
         rc = sasnav_traj_align(out->centroids, n, &out->track_angle);
         if (rc) return rc;
     }
-    if (ctx->post_buf && out->n_pairs == n - 1) {
+    if (ctx->post_buf && out->n_pairs == n - 1 && o->method != SASNAV_METHOD_DPCA) {
         /* The smoother's posterior carried through the chain (with long
-         * baselines the least squares re-weighs the links: not here). */
+         * baselines the least squares re-weighs the links: not here; DPCA
+         * takes the surge as nominal, which link_sigma's 1 mm a pair
+         * would call measured: not there either). */
         out->formal_sigma = malloc(sizeof(sasnav_pose) * (size_t)n);
         if (!out->formal_sigma) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
         rc = fuse_pose_sigma(n - 1, &ctx->post, out->centroids, out->formal_sigma);

@@ -1169,8 +1169,8 @@ class Navigation:
     n_eta_outliers: int = 0  # pairs over eta_outlier x eta_median
     # formal standard deviations of the centroids relative to the first
     # (POSE_DTYPE: along, across the aligned track, yaw): the smoother's
-    # posterior carried through the chain; None without a smoother or with
-    # long baselines (docs/navigation.md, "Formal standard deviations")
+    # posterior carried through the chain; None without a smoother, with long
+    # baselines or for DPCA (docs/navigation.md, "Formal standard deviations")
     formal_sigma: Optional[np.ndarray] = None
 
     def placed(self, first_pose):
