@@ -306,7 +306,7 @@ static int write_report(demo *d)
     }
     fprintf(f, "\nThe formal standard deviation is the smoother's (docs/navigation.md, \"Formal standard "
                "deviations\"): without aiding it understates the final sway's error (on held-out runs "
-               "of this preset the error is about 1.8x it at the median); none for DPCA.\n");
+               "of this preset it would have to be about 1.8x larger); none for DPCA.\n");
     /* Flagged pairs, one row each (docs/navigation.md, "Trust"). */
     int any = 0;
     for (int m = 0; m < 2; m++)

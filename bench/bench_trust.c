@@ -82,9 +82,9 @@ static const char *const names[N_METHODS] = {"paper", "subspace", "dpca", "aidin
 
 typedef struct {
     double *final_sway, *final_surge, *final_yaw, *rms_sway;
-    double *z[3];       /* final error / predicted standard deviation (surge, sway, yaw) */
-    double *sd_sway;    /* predicted standard deviation of the final sway */
-    double p_within;    /* sum over runs of the predicted probability of lambda/25 */
+    double *z[3];       /* final error / formal standard deviation (surge, sway, yaw) */
+    double *sd_sway;    /* formal standard deviation of the final sway */
+    double p_within;    /* sum over runs of the formal sd's probability of lambda/25 */
     int n_sd;           /* runs with a prediction */
     int slips, unflagged, flagged, pairs, within;
 } stats;

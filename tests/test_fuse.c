@@ -255,20 +255,16 @@ static void invert(int k, double *a)
     free(w);
 }
 
-/* The trajectory's predicted standard deviations (fuse_pose_sigma, O(n)
- * prefix sums of the factored system) against a slow direct reference:
- * each component's posterior covariance from the dense inverse of the
- * smoother's information matrix (the bias unknown included, then
- * marginalised by taking the block), carried through numerical
- * derivatives of the composed poses. Weights that couple the steps
- * strongly (a motion model as tight as the estimates, a bridged step
- * without an estimate, the aiding's bias in surge and sway), so that the
- * tails and the bias term of the fast form matter; the poses handed to
- * it 6e6 m from the origin. Tolerance: 1e-6 relative (central
- * differences of step 1e-6 on poses of order 1). */
-static void test_pose_sigma(void)
+enum { M = 12 };
+
+/* One case of test_pose_sigma: returns the worst relative difference to the
+ * dense reference and writes the fast form's final deviations. With
+ * `huber` > 0 and `outlier` an estimate 20 of its deviations off the
+ * aiding in yaw: the smoother down-weights it, and the reference takes
+ * the Huber weights from the smoother's final e (the weights of its last
+ * solve agree with them to the loop's 1e-3 change test). */
+static double pose_sigma_case(double huber, int outlier, sasnav_pose *final_sigma)
 {
-    enum { M = 12 };
     sasnav_pose m[M], sm[M], a[M], sa[M], e[M], nom[M], disp[M], poses[M + 1], sigma[M + 1];
     for (int j = 0; j < M; j++) {
         m[j] = (sasnav_pose){1e-3 * sin(0.7 * j), 2e-5 * cos(0.3 * j), 5e-5 * sin(0.5 * j)};
@@ -279,6 +275,7 @@ static void test_pose_sigma(void)
     }
     sm[5] = (sasnav_pose){INFINITY, INFINITY, INFINITY}; /* a bridged step */
     sa[7].theta = INFINITY;                             /* no gyro there */
+    if (outlier) m[3].theta += 20 * sm[3].theta;
     sasnav_pose motion = {1e-3, 5e-5, 1e-4}, bs = {4e-4, 4e-4, 0};
     double buf[9 * M];
     fuse_posterior post;
@@ -287,7 +284,7 @@ static void test_pose_sigma(void)
         post.off[k] = buf + (3 * k + 1) * M;
         post.yu[k] = buf + (3 * k + 2) * M;
     }
-    CHECK_OK(fuse_smooth_post(M, m, sm, a, sa, motion, 0.0, bs, e, NULL, &post));
+    CHECK_OK(fuse_smooth_post(M, m, sm, a, sa, motion, huber, bs, e, NULL, &post));
     CHECK(post.denom[0] > 0 && post.denom[1] > 0 && post.denom[2] == 0, "bias terms %g %g %g", post.denom[0],
           post.denom[1], post.denom[2]);
     for (int j = 0; j < M; j++)
@@ -308,6 +305,10 @@ static void test_pose_sigma(void)
         for (int j = 0; j < M; j++) {
             double s1 = comp(sm[j], k), s2 = comp(sa[j], k);
             double w1 = isfinite(s1) ? 1.0 / (s1 * s1) : 0.0, w2 = isfinite(s2) ? 1.0 / (s2 * s2) : 0.0;
+            if (huber > 0 && isfinite(s1)) {
+                double r = fabs(comp(m[j], k) - comp(e[j], k)) / s1;
+                if (r > huber) w1 *= huber / r;
+            }
             info[j * K + j] += 1.0 + w1 + w2; /* the smoother's prior of 1 (m, rad) */
             if (j + 1 < M) {
                 info[j * K + j] += wm;
@@ -357,9 +358,41 @@ static void test_pose_sigma(void)
             double rel = i == 0 ? fabs(got) : fabs(got - ref) / ref;
             if (rel > worst) worst = rel;
         }
+    *final_sigma = sigma[M];
+    return worst;
+}
+
+/* The trajectory's formal standard deviations (fuse_pose_sigma, O(n)
+ * prefix sums of the factored system) against a slow direct reference:
+ * each component's posterior covariance from the dense inverse of the
+ * smoother's information matrix (the bias unknown included, then
+ * marginalised by taking the block), carried through numerical
+ * derivatives of the composed poses. Weights that couple the steps
+ * strongly (a motion model as tight as the estimates, a bridged step
+ * without an estimate, the aiding's bias in surge and sway), so that the
+ * tails and the bias term of the fast form matter; the poses handed to
+ * it 6e6 m from the origin. Tolerance: 1e-6 relative (central
+ * differences of step 1e-6 on poses of order 1); with Huber weights
+ * 1e-3 (the reference's weights from the final e, within the loop's
+ * 1e-3 of those solved with), and the down-weighting must show: the
+ * final yaw deviation grows by more than 20 x that (a fast form with the
+ * first pass's unit weights would miss the reference by that much). */
+static void test_pose_sigma(void)
+{
+    sasnav_pose plain, robust;
+    double worst = pose_sigma_case(0.0, 0, &plain);
     printf("pose sigma: final %.4g m, %.4g m, %.4g rad; worst relative difference to the dense one %.2e\n",
-           sigma[M].x, sigma[M].y, sigma[M].theta, worst);
-    CHECK(worst < 1e-6, "predicted standard deviations differ from the dense reference by %.2e", worst);
+           plain.x, plain.y, plain.theta, worst);
+    CHECK(worst < 1e-6, "formal standard deviations differ from the dense reference by %.2e", worst);
+    worst = pose_sigma_case(3.0, 1, &robust);
+    sasnav_pose outl;
+    pose_sigma_case(0.0, 1, &outl);
+    double grew = robust.theta / outl.theta - 1.0;
+    printf("pose sigma with an outlier down-weighted: final yaw %.4g rad (%.4g without Huber), worst "
+           "relative difference %.2e\n",
+           robust.theta, outl.theta, worst);
+    CHECK(worst < 1e-3, "with Huber weights: differ from the dense reference by %.2e", worst);
+    CHECK(grew > 0.02, "the down-weighted outlier did not widen the yaw deviation (%.3g)", grew);
 }
 
 int main(void)

@@ -373,16 +373,18 @@ struct sasnav_navigation {
                                      eta_median */
     sasnav_pose *formal_sigma;    /* n_pings formal standard deviations of
                                      centroids[] relative to the first (along,
-                                     across the aligned track, yaw; [0] = 0):
+                                     across the aligned track, yaw; world x,
+                                     y with opts.align 0; [0] = 0):
                                      the smoother's posterior (its standard
                                      deviations of the pairs, the aiding's
-                                     and the motion model's, Huber weights
-                                     as they ended) carried through the
+                                     and the motion model's, the Huber
+                                     weights of its last solve) carried through the
                                      chain, linearised. NULL where no
-                                     smoother ran (opts.resolve 0), with
-                                     long baselines, and for DPCA. As right as the
+                                     smoother ran (opts.resolve 0), where
+                                     long baselines were estimated, and for
+                                     DPCA. As right as the
                                      standard deviations it weighs with:
-                                     docs/navigation.md, "Predicted
+                                     docs/navigation.md, "Formal
                                      standard deviations" */
 };
 

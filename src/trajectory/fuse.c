@@ -194,8 +194,8 @@ int fuse_smooth_post(int n, const sasnav_pose *m, const sasnav_pose *sm, const s
                 bk = (sum_wa_a - ux) / (beta - uy);
                 for (int j = 0; j < n; j++) b[j] -= u[j] * bk;
                 if (post) {
-                    memcpy(post->yu[k], u, sz);
-                    post->denom[k] = beta - uy;
+                    if (post->yu[k]) memcpy(post->yu[k], u, sz);
+                    post->denom[k] = post->yu[k] ? beta - uy : 0.0; /* (no yu: no bias term) */
                 }
             } else {
                 tridiag_solve(n, d, o, b);
@@ -293,7 +293,7 @@ int fuse_pose_sigma(int n, const fuse_posterior *post, const sasnav_pose *poses,
         for (int k = 0; k < 3; k++) {
             const double *d = post->d[k], *o = post->off[k];
             double l = i > 0 ? o[i - 1] / d[i - 1] : 0.0, h[3], al[3];
-            step_jacobian(k, poses, i, mm, h, NULL);
+            step_jacobian(k, poses, i, mm, h, al);
             A[k] = 1.0 - l * A[k];
             for (int p = 0; p < 3; p++) H[k][p] = h[p] - l * H[k][p];
             double w = 1.0 / d[i];
@@ -307,7 +307,6 @@ int fuse_pose_sigma(int n, const fuse_posterior *post, const sasnav_pose *poses,
                 su[k] += post->yu[k][i];
                 for (int p = 0; p < 3; p++) shu[k][p] += h[p] * post->yu[k][i];
             }
-            step_jacobian(k, poses, i, mm, h, al);
             double tk = tau[(size_t)k * (size_t)(n + 1) + (size_t)mm], y[3], g[3];
             for (int p = 0; p < 3; p++) {
                 y[p] = al[p] * A[k] + H[k][p];

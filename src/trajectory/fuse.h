@@ -56,7 +56,10 @@ int fuse_smooth_bias(int n, const sasnav_pose *m, const sasnav_pose *sm, const s
  * also yu[k] = T^-1 u (u: the aiding's weights) and the Schur complement's
  * denominator denom[k] = beta - u^T T^-1 u (0: no bias term). The
  * posterior covariance of e (the bias marginalised) is then T^-1 + yu
- * yu^T / denom (Sherman-Morrison). Arrays of n doubles each, the caller's. */
+ * yu^T / denom (Sherman-Morrison). Arrays of n doubles each, the caller's
+ * (yu[k] may be NULL: the bias term is then left out, denom[k] = 0). The
+ * Huber weights are those of the last solve (the loop's change test
+ * passed, or its five passes spent). */
 typedef struct {
     double *d[3];
     double *off[3];
