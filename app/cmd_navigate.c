@@ -298,7 +298,8 @@ static void print_json(const char *input, const sasnav_navigation *nav)
         json_object_set_new(root, "rms_sway_error", json_null());
     }
     /* the smoother's formal standard deviations, truth or not */
-    json_object_set_new(root, "formal_final_sigma", nav->formal_sigma ? pose_json(nav->formal_sigma[n - 1]) : json_null());
+    json_object_set_new(root, "formal_final_sigma",
+                        nav->formal_sigma ? pose_json(nav->formal_sigma[n - 1]) : json_null());
     json_t *pairs = json_array();
     for (int j = 0; j < nav->n_pairs; j++) {
         sasnav_navigate_pair pair;

@@ -374,18 +374,18 @@ struct sasnav_navigation {
     sasnav_pose *formal_sigma;    /* n_pings formal standard deviations of
                                      centroids[] relative to the first (along,
                                      across the aligned track, yaw; world x,
-                                     y with opts.align 0; [0] = 0):
-                                     the smoother's posterior (its standard
+                                     y with opts.align 0; [0] = 0): the
+                                     smoother's posterior (its standard
                                      deviations of the pairs, the aiding's
                                      and the motion model's, the Huber
-                                     weights of its last solve) carried through the
-                                     chain, linearised. NULL where no
-                                     smoother ran (opts.resolve 0), where
-                                     long baselines were estimated, and for
-                                     DPCA. As right as the
-                                     standard deviations it weighs with:
-                                     docs/navigation.md, "Formal
-                                     standard deviations" */
+                                     weights of its last solve) carried
+                                     through the chain, linearised. NULL
+                                     where no smoother ran (opts.resolve 0),
+                                     where long baselines were estimated, and
+                                     for DPCA. As right as the standard
+                                     deviations it weighs with:
+                                     docs/navigation.md, "Formal standard
+                                     deviations" */
 };
 
 /* Pair j (0 <= j < n_pairs) of `nav`, whether its pairs are packed
