@@ -903,7 +903,7 @@ int cmd_navigate(int argc, char **argv)
             nav.nav[i].array = sasnav_pose_compose(move, nav.nav[i].array);
         }
     }
-    rc = sasnav_nav_write(output, nav.n_pings, written, run->truth);
+    rc = sasnav_nav_write_sigma(output, nav.n_pings, written, run->truth, nav.formal_sigma);
     int channel_tx = run->channel_offset != NULL;
     sasnav_run_free(run);
     if (rc) {

@@ -1,6 +1,8 @@
-/* fuzz_nav_h5: sasnav_nav_read on structure-aware generated navigation
- * files (h5gen.h). Contract: SASNAV_OK with n >= 1 finite poses, or
- * SASNAV_ERR_FORMAT / IO / NOMEM with a message and nothing allocated. */
+/* fuzz_nav_h5: sasnav_nav_read and sasnav_nav_read_sigma on
+ * structure-aware generated navigation files (h5gen.h). Contract: SASNAV_OK
+ * with n >= 1 finite poses (and standard deviations finite and >= 0, or
+ * none), or SASNAV_ERR_FORMAT / IO / NOMEM with a message and nothing
+ * allocated. */
 #include "fuzz_common.h"
 #include "h5gen.h"
 #include "sasnav/io.h"
@@ -13,6 +15,7 @@ static double fill_nav_array(size_t i, const hsize_t *dims, int rank)
 {
     return i % 3 == 0 ? -0.9 + 0.2 * (double)(i / 3) : (i % 3 == 2 ? 0.01 : 0.0);
 }
+static double fill_sigma(size_t i, const hsize_t *dims, int rank) { return 1e-4 * (double)(i % 7); }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
@@ -31,6 +34,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         h5g_dataset(&g, f, "/truth/tx", D_REAL, 2, dn, fill_nav);
         h5g_dataset(&g, f, "/truth/array", D_REAL, 2, dn, fill_nav_array);
     }
+    if (opt & 4) h5g_dataset(&g, f, "/nav_sigma", D_REAL, 2, dn, fill_sigma);
     h5g_extras(&g, f);
     H5Fclose(f);
 
@@ -55,5 +59,20 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     free(nav);
     free(truth);
+    sasnav_pose *sigma = NULL;
+    n = -1;
+    rc = sasnav_nav_read_sigma(path, &n, &sigma);
+    fz_check_rc("sasnav_nav_read_sigma", rc, allowed);
+    if (rc == SASNAV_OK) {
+        if (n < 1) abort();
+        for (int p = 0; sigma && p < n; p++)
+            if (!(sigma[p].x >= 0 && sigma[p].y >= 0 && sigma[p].theta >= 0) || !isfinite(sigma[p].x) ||
+                !isfinite(sigma[p].y) || !isfinite(sigma[p].theta))
+                abort();
+    } else if (sigma || n != 0) {
+        fprintf(stderr, "sasnav_nav_read_sigma: error but outputs set\n");
+        abort();
+    }
+    free(sigma);
     return 0;
 }

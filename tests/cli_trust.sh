@@ -77,6 +77,21 @@ for d in (fused, alone, aid):
 assert fused["formal_final_sigma"]["sway"] < alone["formal_final_sigma"]["sway"], \
     (fused["formal_final_sigma"], alone["formal_final_sigma"])
 assert raw["formal_sigma"] is None and raw["formal_final_sigma"] is None
+# ... and in the navigation file, /nav_sigma [ping][3] (where h5py is)
+try:
+    import h5py
+except ImportError:
+    h5py = None
+if h5py is not None:
+    nav_dir = sys.argv[1].rsplit("/", 1)[0]
+    with h5py.File(nav_dir + "/nav.h5", "r") as f:
+        rows = f["nav_sigma"][()]
+    want = [[s["surge"], s["sway"], s["yaw"]] for s in fused["formal_sigma"]]
+    assert rows.shape == (len(want), 3), rows.shape
+    assert all(abs(a - b) <= 1e-9 * max(abs(b), 1e-30) for r, w in zip(rows, want) for a, b in zip(r, w)), \
+        (rows, want)
+    with h5py.File(nav_dir + "/navr.h5", "r") as f:
+        assert "nav_sigma" not in f
 assert fused["aiding_used"] is True and alone["aiding_used"] is False, (fused["aiding_used"], alone["aiding_used"])
 assert aid["method"] == "aiding" and aid["aiding_used"] is True
 for d in (fused, alone):

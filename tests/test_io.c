@@ -280,6 +280,59 @@ static void test_nav_round_trip(void)
         CHECK(rn == NULL && strstr(sasnav_last_error(), "ping 4") != NULL, "implausible nav: '%s'",
               sasnav_last_error());
     }
+    /* Standard deviations (/nav_sigma): a bit-exact round trip; none in a
+     * file written without them; refused when negative or not finite, on
+     * writing and (a file edited after) on reading; a shape other than
+     * /nav's refused. */
+    {
+        sasnav_pose sg[N];
+        for (int i = 0; i < N; i++) sg[i] = (sasnav_pose){1e-3 * i, 3e-5 * i * i, 2e-5 * i};
+        const char *sp = tmp_file("nav_sigma.h5");
+        CHECK_OK(sasnav_nav_write_sigma(sp, N, nav, truth, sg));
+        int n = 0;
+        sasnav_pose *rs = NULL;
+        CHECK_OK(sasnav_nav_read_sigma(sp, &n, &rs));
+        check_no_open_objects("nav_read_sigma");
+        CHECK(n == N && rs && memcmp(rs, sg, sizeof sg) == 0, "standard deviations round trip differs");
+        free(rs);
+        sasnav_ping_pose *rn = NULL;
+        CHECK_OK(sasnav_nav_read(sp, &n, &rn, NULL)); /* the rest of the file as before */
+        CHECK(rn && memcmp(rn, nav, sizeof nav) == 0, "nav beside standard deviations differs");
+        free(rn);
+        rs = (sasnav_pose *)1;
+        CHECK_OK(sasnav_nav_read_sigma(path, &n, &rs)); /* written without */
+        CHECK(rs == NULL && n == N, "a file without /nav_sigma: %p, %d pings", (void *)rs, n);
+        sg[3].y = -1e-6;
+        CHECK_FAILS(sasnav_nav_write_sigma(tmp_file("nav_bad.h5"), N, nav, NULL, sg), SASNAV_ERR_ARG);
+        sg[3].y = NAN;
+        CHECK_FAILS(sasnav_nav_write_sigma(tmp_file("nav_bad.h5"), N, nav, NULL, sg), SASNAV_ERR_ARG);
+        CHECK(dir_count(test_tmpdir(), "nav_bad") == 0, "a refused write left a file");
+        hid_t f = H5Fopen(sp, H5F_ACC_RDWR, H5P_DEFAULT);
+        hid_t d = H5Dopen2(f, "/nav_sigma", H5P_DEFAULT);
+        double v[N * 3];
+        H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v);
+        v[3 * 5 + 1] = -2e-5;
+        H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v);
+        H5Dclose(d);
+        H5Fclose(f);
+        rs = NULL;
+        CHECK_FAILS(sasnav_nav_read_sigma(sp, &n, &rs), SASNAV_ERR_FORMAT);
+        CHECK(rs == NULL && n == 0 && strstr(sasnav_last_error(), "nav_sigma") != NULL,
+              "negative standard deviation read: '%s'", sasnav_last_error());
+        /* /nav_sigma of another length than /nav */
+        f = H5Fopen(sp, H5F_ACC_RDWR, H5P_DEFAULT);
+        H5Ldelete(f, "/nav_sigma", H5P_DEFAULT);
+        hsize_t dims[2] = {N - 1, 3};
+        hid_t space = H5Screate_simple(2, dims, NULL);
+        d = H5Dcreate2(f, "/nav_sigma", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+        for (int i = 0; i < N * 3; i++) v[i] = 1e-3;
+        H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v);
+        H5Dclose(d);
+        H5Sclose(space);
+        H5Fclose(f);
+        CHECK_FAILS(sasnav_nav_read_sigma(sp, &n, &rs), SASNAV_ERR_FORMAT);
+        CHECK(rs == NULL, "standard deviations of the wrong shape read");
+    }
     /* A nav file is not a run. */
     sasnav_run *run = (sasnav_run *)1;
     CHECK_FAILS(sasnav_run_read(path, &run), SASNAV_ERR_FORMAT);

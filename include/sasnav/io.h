@@ -50,6 +50,20 @@ int sasnav_nav_write(const char *path, int n_pings, const sasnav_ping_pose *nav,
 int sasnav_nav_read(const char *path, int *n_pings, sasnav_ping_pose **nav,
                     sasnav_ping_pose **truth);
 
+/* sasnav_nav_write with the navigation's standard deviations as well:
+ * /nav_sigma [ping][3] (sasnav_navigation.formal_sigma: along, across the
+ * track (m), yaw (rad) of each PCA centroid relative to the first); sigma
+ * may be NULL (none written). SASNAV_ERR_ARG also for a value that is not
+ * finite or is negative. */
+int sasnav_nav_write_sigma(const char *path, int n_pings, const sasnav_ping_pose *nav,
+                           const sasnav_ping_pose *truth, const sasnav_pose *sigma);
+/* Reads /nav_sigma of a navigation (or run) file: *sigma allocated with
+ * *n_pings rows (those of /nav), or NULL when the file has none (then
+ * *n_pings is still /nav's). SASNAV_ERR_IO / SASNAV_ERR_FORMAT as
+ * sasnav_nav_read, also for a /nav_sigma whose shape is not /nav's or
+ * whose values are not finite and >= 0; SASNAV_ERR_ARG, SASNAV_ERR_NOMEM. */
+int sasnav_nav_read_sigma(const char *path, int *n_pings, sasnav_pose **sigma);
+
 /* Complex image: /image [ny][nx] compound {r, i} float32, /x [nx], /y [ny]. */
 int sasnav_image_write(const char *path, const sasnav_grid *grid, const sasnav_cfloat *image);
 

@@ -111,6 +111,15 @@ def test_navigate_short_run(short_trajectory, tmp_path):
     sasnav.write_nav(nav, tmp_path / "nav.h5")
     back = sasnav.read_nav(tmp_path / "nav.h5")
     assert np.array_equal(back.nav, nav.nav) and np.array_equal(back.truth, short_trajectory.truth)
+    # the formal standard deviations travel with the navigation (/nav_sigma)
+    assert np.array_equal(back.formal_sigma, nav.formal_sigma)
+    sasnav.write_nav(nav.nav, tmp_path / "plain.h5")
+    assert sasnav.read_nav(tmp_path / "plain.h5").formal_sigma is None
+    bad = nav.formal_sigma.copy()
+    bad[1]["y"] = -1.0
+    with pytest.raises(sasnav.Error):
+        sasnav.write_nav(sasnav.NavData(nav.nav, None, bad), tmp_path / "bad.h5")
+    assert not (tmp_path / "bad.h5").exists()
     placed = nav.placed((1.0, 2.0, 0.1))
     c0 = sasnav.centroids(placed)[0]
     assert (c0["x"], c0["y"], c0["theta"]) == pytest.approx((1.0, 2.0, 0.1), abs=1e-9)

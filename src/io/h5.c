@@ -674,18 +674,44 @@ int sasnav_run_open(const char *path, sasnav_run **run) { return run_load(path, 
 
 /* --- navigation files ------------------------------------------------------ */
 
+/* /nav_sigma is written from and read into sasnav_pose rows directly. */
+_Static_assert(sizeof(sasnav_pose) == 3 * sizeof(double), "sasnav_pose is three doubles");
+
+/* Standard deviations: n rows of three finite values >= 0. */
+static int sigma_ok(int n, const sasnav_pose *sigma)
+{
+    for (int p = 0; p < n; p++)
+        if (!(sigma[p].x >= 0) || !(sigma[p].y >= 0) || !(sigma[p].theta >= 0) || !isfinite(sigma[p].x) ||
+            !isfinite(sigma[p].y) || !isfinite(sigma[p].theta))
+            return 0;
+    return 1;
+}
+
 int sasnav_nav_write(const char *path, int n_pings, const sasnav_ping_pose *nav,
                      const sasnav_ping_pose *truth)
+{
+    return sasnav_nav_write_sigma(path, n_pings, nav, truth, NULL);
+}
+
+int sasnav_nav_write_sigma(const char *path, int n_pings, const sasnav_ping_pose *nav,
+                           const sasnav_ping_pose *truth, const sasnav_pose *sigma)
 {
     if (!path || !nav || n_pings < 1)
         return sasnav_set_error(SASNAV_ERR_ARG, "navigation write needs a path and >= 1 pose");
     if (!poses_finite(n_pings, nav) || (truth && !poses_finite(n_pings, truth)))
         return sasnav_set_error(SASNAV_ERR_ARG, "navigation to write is not finite");
+    if (sigma && !sigma_ok(n_pings, sigma))
+        return sasnav_set_error(SASNAV_ERR_ARG, "standard deviations to write are not finite and >= 0");
     h5_ctx c;
     h5_begin(&c, path);
     int rc = h5_create_tmp(&c, "sasnav-nav");
     if (!rc) rc = poses_write(&c, "/nav", n_pings, nav);
     if (!rc && truth) rc = poses_write(&c, "/truth", n_pings, truth);
+    if (!rc && sigma) {
+        hsize_t dims[2] = {(hsize_t)n_pings, 3};
+        /* (sasnav_pose is three doubles: x, y, theta) */
+        rc = h5_write_dataset(&c, "/nav_sigma", H5_REAL, 2, dims, NULL, sigma, UNITS_POSE);
+    }
     if (!rc) rc = h5_commit(&c);
     h5_end(&c);
     return rc;
@@ -717,6 +743,35 @@ static int nav_read_open(h5_ctx *c, int *n_pings, sasnav_ping_pose **nav, sasnav
     *n_pings = n;
     *nav = pn;
     if (truth) *truth = pt;
+    return SASNAV_OK;
+}
+
+int sasnav_nav_read_sigma(const char *path, int *n_pings, sasnav_pose **sigma)
+{
+    if (sigma) *sigma = NULL;
+    if (n_pings) *n_pings = 0;
+    if (!path || !n_pings || !sigma)
+        return sasnav_set_error(SASNAV_ERR_ARG, "standard deviations read needs a path and output pointers");
+    h5_ctx c;
+    h5_begin(&c, path);
+    int rc = h5_open_read(&c, NAV_FORMATS, 2), n = 0;
+    if (!rc) rc = poses_count(&c, "/nav", &n);
+    sasnav_pose *s = NULL;
+    if (!rc && n >= 1 && h5_exists(&c, "/nav_sigma")) {
+        s = malloc(sizeof *s * (size_t)n);
+        hsize_t dims[2] = {(hsize_t)n, 3};
+        if (!s) rc = h5_fail(&c, SASNAV_ERR_NOMEM, "cannot allocate %d standard deviations", n);
+        if (!rc) rc = h5_read_dataset_dims(&c, "/nav_sigma", H5_REAL, 2, dims, s);
+        if (!rc && !sigma_ok(n, s))
+            rc = h5_fail(&c, SASNAV_ERR_FORMAT, "/nav_sigma: a standard deviation is not finite and >= 0");
+    }
+    h5_end(&c);
+    if (rc) {
+        free(s);
+        return rc;
+    }
+    *n_pings = n;
+    *sigma = s;
     return SASNAV_OK;
 }
 

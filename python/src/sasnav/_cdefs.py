@@ -622,6 +622,8 @@ PROTOTYPES = {
     "sasnav_run_write": (_i, [c_char_p, _P(RunC)]),
     "sasnav_nav_read": (_i, [c_char_p, _P(_i), _P(_P(PingPose)), _P(_P(PingPose))]),
     "sasnav_nav_write": (_i, [c_char_p, _i, _P(PingPose), _P(PingPose)]),
+    "sasnav_nav_write_sigma": (_i, [c_char_p, _i, _P(PingPose), _P(PingPose), _P(Pose)]),
+    "sasnav_nav_read_sigma": (_i, [c_char_p, _P(_i), _P(_P(Pose))]),
     "sasnav_image_read": (_i, [c_char_p, _P(GridC), _P(cfloat_p)]),
     "sasnav_image_write": (_i, [c_char_p, _P(GridC), cfloat_p]),
     "sasnav_config_load": (_i, [c_char_p, _P(ScenarioC)]),

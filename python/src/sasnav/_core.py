@@ -514,10 +514,12 @@ def write_run(run, path):
 @dataclass
 class NavData:
     """A navigation file: ping poses `nav` and optionally `truth`
-    (PING_POSE_DTYPE [n_pings])."""
+    (PING_POSE_DTYPE [n_pings]) and `formal_sigma` (POSE_DTYPE [n_pings]:
+    the navigation's formal standard deviations, /nav_sigma)."""
 
     nav: np.ndarray
     truth: Optional[np.ndarray] = None
+    formal_sigma: Optional[np.ndarray] = None
 
     @property
     def n_pings(self):
@@ -539,22 +541,37 @@ def read_nav(path):
         # io.h: allocated with malloc (no sasnav_ free function for them).
         c_free(_addr(nav))
         c_free(_addr(truth))
-    return NavData(a, t)
+    sigma = ctypes.POINTER(C.Pose)()
+    try:
+        with io_lock:
+            check(lib().sasnav_nav_read_sigma(path_arg(path), ctypes.byref(n), ctypes.byref(sigma)))
+        sg = _copy_out(_addr(sigma), POSE_DTYPE, n.value) if sigma else None
+    finally:
+        c_free(_addr(sigma))
+    return NavData(a, t, sg)
 
 
 def write_nav(nav, path, truth=None):
     """Writes a navigation file. `nav` is ping poses (see ping_poses), or a
-    NavData / Navigation (its `nav` and, unless `truth` is given, its
-    `truth`)."""
+    NavData / Navigation (its `nav`, its `formal_sigma` if it has them, and,
+    unless `truth` is given, its `truth`)."""
+    sigma = None
     if hasattr(nav, "nav"):
         if truth is None:
             truth = getattr(nav, "truth", None)
+        sigma = getattr(nav, "formal_sigma", None)
         nav = nav.nav
     a = ping_poses(nav)
     t = None if truth is None else ping_poses(truth, a.shape[0], "truth")
+    sg = None
+    if sigma is not None:
+        sg = np.ascontiguousarray(sigma, dtype=POSE_DTYPE)
+        if sg.shape != (a.shape[0],):
+            raise ValueError(f"formal_sigma needs {a.shape[0]} rows, got shape {sg.shape}")
     with io_lock:
-        check(lib().sasnav_nav_write(path_arg(path), a.shape[0], _poses_ptr(a),
-                                     None if t is None else _poses_ptr(t)))
+        check(lib().sasnav_nav_write_sigma(path_arg(path), a.shape[0], _poses_ptr(a),
+                                           None if t is None else _poses_ptr(t),
+                                           None if sg is None else sg.ctypes.data_as(ctypes.POINTER(C.Pose))))
 
 
 # ---------------------------------------------------------------------------
