@@ -32,7 +32,7 @@ preset: paper-trajectory
 trajectory: {n_pings: 3, x_start: -0.2, surge_rms: 0.003, sway_rms: 0.003, yaw_rms: 0.003}
 EOF
 "$CLI" simulate --config "$T/tiny.yaml" --aiding -o "$T/run.h5" > "$T/cli.log" 2>&1 &&
-    "$CLI" navigate "$T/run.h5" --method dpca -o "$T/nav.h5" >> "$T/cli.log" 2>&1 &&
+    "$CLI" navigate "$T/run.h5" --method aiding -o "$T/nav.h5" >> "$T/cli.log" 2>&1 &&
     "$CLI" image "$T/run.h5" --grid -0.3,0.3,40,9.8,10.2,30 -o "$T/image.h5" >> "$T/cli.log" 2>&1 ||
     { cat "$T/cli.log" >&2; echo "octave_readers: FAIL: the CLI could not write the files" >&2; exit 1; }
 
@@ -161,10 +161,13 @@ with h5py.File(T + "/run.h5", "r") as f:
     array("run.n_pings", p); array("run.n_rx", l); array("run.n_samples", m)
 for name, path in (("nav", "/nav.h5"), ("runnav", "/run.h5")):
     with h5py.File(T + path, "r") as f:
-        mapping(name, f, groups=("nav", "truth"))
+        mapping(name, f, groups=("nav", "truth", "nav_sigma"))
         for k in ("nav.tx", "nav.array"):   # nav.tx, not nav.nav.tx
             for c in "ZNC":
                 exp[(c, name + "." + k[4:])] = exp.pop((c, name + "." + k))
+        if "nav_sigma" in f:                # nav.sigma (dead reckoning has it)
+            for c in "ZNC":
+                exp[(c, name + ".sigma")] = exp.pop((c, name + ".nav_sigma"))
         array(name + ".n_pings", f["nav/tx"].shape[0])
 for name, path in (("image", "/image.h5"), ("foreign", "/foreign.h5")):
     with h5py.File(T + path, "r") as f:
@@ -189,6 +192,7 @@ for name, path in (("image", "/image.h5"), ("foreign", "/foreign.h5")):
         for k, v in zip(("x0", "dx", "y0", "dy"), g):
             array(name + ".info." + k, float(v))
 string("wrong_format", 'sasnav: %s/run.h5: format is "sasnav-run", expected "sasnav-image"' % T)
+assert ("Z", "nav.sigma") in exp, "the navigation file has no /nav_sigma to compare"
 
 def close(a, b):
     x = np.array(a.split(), dtype=float); y = np.array(b.split(), dtype=float)

@@ -12,8 +12,9 @@ function [s, t] = sasnav_h5_load(file, formats, groups)
 %       (s.attributes.nav_tx.units = 'm, m, rad');
 %     * root attributes are fields of s (s.format, s.format_version,
 %       s.created_by).
-%   groups: optional cell array of top-level names ('nav', 'truth'): only
-%   datasets under those are read (the others are not loaded at all).
+%   groups: optional cell array of top-level names ('nav', 'truth',
+%   'nav_sigma'): only datasets under those, or of those names at the
+%   root, are read (the others are not loaded at all).
 %   t is the file's tree (sasnav_h5_tree).
 if nargin < 3
     groups = {};
@@ -40,7 +41,7 @@ s.attributes = struct();
 for k = 1:numel(t.datasets)
     d = t.datasets(k);
     parts = strsplit(d.path(2:end), '/');
-    if ~isempty(groups) && (numel(parts) < 2 || ~any(strcmp(parts{1}, groups)))
+    if ~isempty(groups) && ~any(strcmp(parts{1}, groups))
         continue;
     end
     s = set_path(s, parts, sasnav_h5_data(t, d));
