@@ -300,7 +300,9 @@ static void test_nav_round_trip(void)
         CHECK(rn && memcmp(rn, nav, sizeof nav) == 0, "nav beside standard deviations differs");
         free(rn);
         rs = (sasnav_pose *)1;
-        CHECK_OK(sasnav_nav_read_sigma(path, &n, &rs)); /* written without */
+        const char *plain = tmp_file("nav_plain.h5");
+        CHECK_OK(sasnav_nav_write(plain, N, nav, NULL));
+        CHECK_OK(sasnav_nav_read_sigma(plain, &n, &rs)); /* written without */
         CHECK(rs == NULL && n == N, "a file without /nav_sigma: %p, %d pings", (void *)rs, n);
         sg[3].y = -1e-6;
         CHECK_FAILS(sasnav_nav_write_sigma(tmp_file("nav_bad.h5"), N, nav, NULL, sg), SASNAV_ERR_ARG);
@@ -331,7 +333,23 @@ static void test_nav_round_trip(void)
         H5Sclose(space);
         H5Fclose(f);
         CHECK_FAILS(sasnav_nav_read_sigma(sp, &n, &rs), SASNAV_ERR_FORMAT);
-        CHECK(rs == NULL, "standard deviations of the wrong shape read");
+        CHECK(rs == NULL && n == 0, "standard deviations of the wrong shape read");
+        /* a navigation that sasnav_nav_read refuses (/nav/array a row
+         * short) is refused here too, /nav_sigma or not */
+        const char *sq = tmp_file("nav_sigma2.h5");
+        CHECK_OK(sasnav_nav_write_sigma(sq, N, nav, NULL, (sasnav_pose[N]){{0, 0, 0}}));
+        f = H5Fopen(sq, H5F_ACC_RDWR, H5P_DEFAULT);
+        H5Ldelete(f, "/nav/array", H5P_DEFAULT);
+        space = H5Screate_simple(2, dims, NULL); /* dims: N - 1 rows */
+        d = H5Dcreate2(f, "/nav/array", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+        H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v);
+        H5Dclose(d);
+        H5Sclose(space);
+        H5Fclose(f);
+        sasnav_ping_pose *rn2 = NULL;
+        CHECK_FAILS(sasnav_nav_read(sq, &n, &rn2, NULL), SASNAV_ERR_FORMAT);
+        CHECK_FAILS(sasnav_nav_read_sigma(sq, &n, &rs), SASNAV_ERR_FORMAT);
+        CHECK(rs == NULL && n == 0, "a broken navigation's standard deviations read");
     }
     /* A nav file is not a run. */
     sasnav_run *run = (sasnav_run *)1;

@@ -381,8 +381,8 @@ struct sasnav_navigation {
                                      weights of its last solve) carried
                                      through the chain, linearised. NULL
                                      where no smoother ran (opts.resolve 0),
-                                     where long baselines were estimated, and
-                                     for DPCA. As right as the standard
+                                     where long baselines were estimated, for
+                                     DPCA, and where a value overflowed. As right as the standard
                                      deviations it weighs with:
                                      docs/navigation.md, "Formal standard
                                      deviations" */

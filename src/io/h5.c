@@ -755,7 +755,12 @@ int sasnav_nav_read_sigma(const char *path, int *n_pings, sasnav_pose **sigma)
     h5_ctx c;
     h5_begin(&c, path);
     int rc = h5_open_read(&c, NAV_FORMATS, 2), n = 0;
-    if (!rc) rc = poses_count(&c, "/nav", &n);
+    sasnav_ping_pose *pn = NULL;
+    /* the navigation checked as sasnav_nav_read checks it (found by
+     * review: counting /nav/tx's rows alone let a file through that the
+     * navigation reader refuses) */
+    if (!rc) rc = nav_read_open(&c, &n, &pn, NULL);
+    free(pn);
     sasnav_pose *s = NULL;
     if (!rc && n >= 1 && h5_exists(&c, "/nav_sigma")) {
         s = malloc(sizeof *s * (size_t)n);

@@ -1530,6 +1530,14 @@ static int navigate(nav_ctx *ctx, sasnav_navigation *out)
         if (!out->formal_sigma) return sasnav_set_error(SASNAV_ERR_NOMEM, "out of memory");
         rc = fuse_pose_sigma(n - 1, &ctx->post, out->centroids, out->formal_sigma);
         if (rc) return rc;
+        for (int i = 0; i < n && out->formal_sigma; i++)
+            if (!isfinite(out->formal_sigma[i].x) || !isfinite(out->formal_sigma[i].y) ||
+                !isfinite(out->formal_sigma[i].theta)) {
+                /* (an overflow on absurd inputs: none rather than a value
+                 * the navigation file would refuse; found by review) */
+                free(out->formal_sigma);
+                out->formal_sigma = NULL;
+            }
     }
     rc = sasnav_traj_ping_poses(out->centroids, n, run->tx_lag, 0.0, out->nav);
     if (rc) return rc;

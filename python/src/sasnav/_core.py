@@ -548,6 +548,8 @@ def read_nav(path):
         sg = _copy_out(_addr(sigma), POSE_DTYPE, n.value) if sigma else None
     finally:
         c_free(_addr(sigma))
+    if sg is not None and sg.shape[0] != a.shape[0]:
+        raise Error(-4, f"{path}: the file changed while it was read", "format error")
     return NavData(a, t, sg)
 
 
