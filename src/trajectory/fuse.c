@@ -284,12 +284,13 @@ int fuse_pose_sigma(int n, const fuse_posterior *post, const sasnav_pose *poses,
     }
     /* Running values per component: the forward substitutions A = L^-1 1
      * and H = L^-1 h (prefixes do not depend on m), their prefix sums
-     * weighted by 1 / D, and the prefix sums against T^-1 u. */
-    double A[3] = {0}, H[3][3] = {{0}}, saa[3] = {0}, sah[3][3] = {{0}}, shh[3][3][3] = {{{0}}};
+     * weighted by 1 / D, and the prefix sums against T^-1 u; only the
+     * variances (the diagonal of each ping's covariance) are needed. */
+    double A[3] = {0}, H[3][3] = {{0}}, saa[3] = {0}, sah[3][3] = {{0}}, shh[3][3] = {{0}};
     double su[3] = {0}, shu[3][3] = {{0}};
     for (int mm = 1; mm <= n; mm++) {
         int i = mm - 1; /* the step added: ping mm depends on steps 0..mm-1 */
-        double cov[3][3] = {{0}};
+        double var[3] = {0, 0, 0};
         for (int k = 0; k < 3; k++) {
             const double *d = post->d[k], *o = post->off[k];
             double l = i > 0 ? o[i - 1] / d[i - 1] : 0.0, h[3], al[3];
@@ -300,7 +301,7 @@ int fuse_pose_sigma(int n, const fuse_posterior *post, const sasnav_pose *poses,
             saa[k] += A[k] * A[k] * w;
             for (int p = 0; p < 3; p++) {
                 sah[k][p] += A[k] * H[k][p] * w;
-                for (int q = 0; q < 3; q++) shh[k][p][q] += H[k][p] * H[k][q] * w;
+                shh[k][p] += H[k][p] * H[k][p] * w;
             }
             int bias = post->denom[k] > 0 && post->yu[k];
             if (bias) {
@@ -312,16 +313,14 @@ int fuse_pose_sigma(int n, const fuse_posterior *post, const sasnav_pose *poses,
                 y[p] = al[p] * A[k] + H[k][p];
                 g[p] = al[p] * su[k] + shu[k][p];
             }
-            for (int p = 0; p < 3; p++)
-                for (int q = 0; q < 3; q++) {
-                    double c = al[p] * al[q] * saa[k] + al[p] * sah[k][q] + al[q] * sah[k][p] + shh[k][p][q] +
-                               y[p] * y[q] * tk;
-                    if (bias) c += g[p] * g[q] / post->denom[k];
-                    cov[p][q] += c;
-                }
+            for (int p = 0; p < 3; p++) {
+                double c = al[p] * al[p] * saa[k] + al[p] * sah[k][p] + al[p] * sah[k][p] + shh[k][p] +
+                           y[p] * y[p] * tk;
+                if (bias) c += g[p] * g[p] / post->denom[k];
+                var[p] += c;
+            }
         }
-        sigma[mm] = (sasnav_pose){sqrt(fmax(cov[0][0], 0.0)), sqrt(fmax(cov[1][1], 0.0)),
-                                  sqrt(fmax(cov[2][2], 0.0))};
+        sigma[mm] = (sasnav_pose){sqrt(fmax(var[0], 0.0)), sqrt(fmax(var[1], 0.0)), sqrt(fmax(var[2], 0.0))};
     }
     free(tau);
     return SASNAV_OK;

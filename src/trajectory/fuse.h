@@ -77,7 +77,7 @@ int fuse_smooth_post(int n, const sasnav_pose *m, const sasnav_pose *sm, const s
  * composition of the n smoothed steps) relative to ping 0, in the frame of
  * `poses` (the composed poses: x, y, heading), from the posterior of the
  * steps' motion errors in *post, linearised about `poses`: for each ping
- * the 3 x 3 covariance sum_k J_k^T C_k J_k over the components k, C_k the
+ * the diagonal of the covariance sum_k J_k^T C_k J_k over the components k, C_k the
  * posterior covariance of component k of the steps (the components
  * independent, as in the smoother). O(n) for all pings (prefix sums of the
  * factored system). Writes sigma[0..n] (x, y, heading; sigma[0] = 0).
